@@ -1,0 +1,13 @@
+//! streakfit: long-exposure photographs of billiard-ball collisions to physics.
+//!
+//! Data flows one way: image → streaks → angles table → fit → report.
+//! - [`physics`]: the non-smooth impact model (regimes, closed forms, paths);
+//! - `synth`: synthetic photographs with exact ground truth;
+//! - `vision`: segmentation, streaks and path fits (`extract`);
+//! - `fit`: material coefficients with uncertainties and model selection;
+//! - `report`: figures and HTML reports; `pipeline`: `streakfit run`.
+#![deny(clippy::float_cmp)]
+
+pub mod cli;
+pub mod physics;
+pub mod predict;

@@ -1,0 +1,47 @@
+//! The `streakfit` command line. Each subcommand's arguments and logic live in the library;
+//! this file only dispatches and maps results to exit codes (0 ok, 1 failed work, 2 bad usage).
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+use streakfit::cli::CliResult;
+
+#[derive(Parser)]
+#[command(
+    name = "streakfit",
+    version,
+    about = "Long-exposure billiard-collision photographs to physics"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Theory: post-collision and post-transition angles for given coefficients.
+    Predict(streakfit::predict::PredictArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    let result: CliResult = match &cli.command {
+        Command::Predict(a) => streakfit::predict::run(a),
+    };
+    match result {
+        Ok(outcome) => outcome.exit_code(),
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            err.exit_code()
+        }
+    }
+}
