@@ -11,3 +11,4 @@
 pub mod cli;
 pub mod physics;
 pub mod predict;
+pub mod table;
