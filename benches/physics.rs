@@ -4,7 +4,7 @@
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use streakfit::physics::{Coefficients, RegimeChoice, Shot, closed, impulse, regime};
+use streakfit::physics::{Coefficients, RegimeChoice, Shot, closed, impulse};
 
 fn shots(n: usize) -> Vec<(Shot, Coefficients)> {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
@@ -17,7 +17,11 @@ fn shots(n: usize) -> Vec<(Shot, Coefficients)> {
                 english: rng.gen_range(-0.5..0.5),
             };
             let mu = rng.gen_range(0.0..0.7);
-            (shot, Coefficients::new(rng.gen_range(0.5..1.0), mu, rng.gen_range(0.0..0.6)).with_static(mu * 1.2))
+            (
+                shot,
+                Coefficients::new(rng.gen_range(0.5..1.0), mu, rng.gen_range(0.0..0.6))
+                    .with_static(mu * 1.2),
+            )
         })
         .collect()
 }
@@ -29,8 +33,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("closed_form_auto", |b| {
         b.iter(|| {
             for (s, k) in &set {
-                let r = regime::select_regime(s, k);
-                black_box(closed::angles(black_box(s), k, r));
+                black_box(closed::predict_auto(black_box(s), k));
             }
         })
     });

@@ -11,7 +11,12 @@ use streakfit::physics::{
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
 fn shot(psi_deg: f64, m: f64, r: f64, s: f64) -> Shot {
-    Shot { psi: psi_deg * DEG, mass_ratio: m, spin: r, english: s }
+    Shot {
+        psi: psi_deg * DEG,
+        mass_ratio: m,
+        spin: r,
+        english: s,
+    }
 }
 
 fn deg(a: Option<f64>) -> f64 {
@@ -25,16 +30,32 @@ fn frictionless(e: f64) -> Coefficients {
 /// Angle difference wrapped to (-pi, pi].
 fn ang_diff(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    if d > std::f64::consts::PI { d - std::f64::consts::TAU } else { d }
+    if d > std::f64::consts::PI {
+        d - std::f64::consts::TAU
+    } else {
+        d
+    }
 }
 
 #[test]
 fn ninety_degree_rule_for_stun_shots() {
     for psi in [0.5, 10.0, 30.0, 45.0, 60.0, 89.0] {
-        let st = impulse::solve(&shot(psi, 1.0, 0.0, 0.0), &frictionless(1.0), RegimeChoice::Auto);
+        let st = impulse::solve(
+            &shot(psi, 1.0, 0.0, 0.0),
+            &frictionless(1.0),
+            RegimeChoice::Auto,
+        );
         let a = st.angles();
-        assert!((deg(a.delta1) - 90.0).abs() < 1e-9, "psi {psi}: delta1 {:?}", a.delta1);
-        assert!((deg(a.theta1) - 90.0).abs() < 1e-9, "psi {psi}: theta1 {:?}", a.theta1);
+        assert!(
+            (deg(a.delta1) - 90.0).abs() < 1e-9,
+            "psi {psi}: delta1 {:?}",
+            a.delta1
+        );
+        assert!(
+            (deg(a.theta1) - 90.0).abs() < 1e-9,
+            "psi {psi}: theta1 {:?}",
+            a.theta1
+        );
         assert!(deg(a.delta2).abs() < 1e-9 && deg(a.theta2).abs() < 1e-9);
     }
 }
@@ -67,9 +88,13 @@ fn frictionless_object_ball_leaves_along_line_of_centres() {
     for e in [0.0, 0.5, 0.97, 1.0] {
         for psi in [0.0, 20.0, 60.0, 85.0] {
             for (r, s) in [(1.0, 0.0), (0.0, 0.3), (-1.0, -0.5)] {
-                let st = impulse::solve(&shot(psi, 1.0, r, s), &frictionless(e), RegimeChoice::Auto);
+                let st =
+                    impulse::solve(&shot(psi, 1.0, r, s), &frictionless(e), RegimeChoice::Auto);
                 let a = st.angles();
-                assert!(deg(a.delta2).abs() < 1e-12 && deg(a.theta2).abs() < 1e-12, "e {e} psi {psi}");
+                assert!(
+                    deg(a.delta2).abs() < 1e-12 && deg(a.theta2).abs() < 1e-12,
+                    "e {e} psi {psi}"
+                );
             }
         }
     }
@@ -112,8 +137,16 @@ fn heavy_cue_ball_goes_on_undeflected_in_every_regime() {
 #[test]
 fn table_friction_cancels_from_theta2_in_gross_slip() {
     for psi in [10.0, 40.0, 70.0] {
-        let a = closed::angles(&shot(psi, 1.0, 1.0, 0.0), &Coefficients::new(0.97, 0.07, 0.0), Regime::MuMu);
-        let b = closed::angles(&shot(psi, 1.0, 1.0, 0.0), &Coefficients::new(0.97, 0.07, 0.5), Regime::MuMu);
+        let a = closed::angles(
+            &shot(psi, 1.0, 1.0, 0.0),
+            &Coefficients::new(0.97, 0.07, 0.0),
+            Regime::MuMu,
+        );
+        let b = closed::angles(
+            &shot(psi, 1.0, 1.0, 0.0),
+            &Coefficients::new(0.97, 0.07, 0.5),
+            Regime::MuMu,
+        );
         assert!((deg(a.theta2) - deg(b.theta2)).abs() < 1e-12);
         // ... and moves delta2 only a little for billiard-ball values.
         let d = (deg(a.delta2) - deg(b.delta2)).abs();
@@ -137,7 +170,10 @@ fn limit_angles_of_table_one_materials() {
     // Billiard balls: gross slip at every angle.
     let billiard = Coefficients::new(0.97, 0.07, 0.15);
     for psi in [0.0, 10.0, 45.0, 89.0] {
-        assert_eq!(regime::select_regime(&shot(psi, 1.0, 1.0, 0.0), &billiard), Regime::MuMu);
+        assert_eq!(
+            regime::select_regime(&shot(psi, 1.0, 1.0, 0.0), &billiard),
+            Regime::MuMu
+        );
     }
 }
 
@@ -152,19 +188,35 @@ fn table_limit_closed_forms_match_the_stick_conditions() {
     // Eq. (53), table under a sticking ball–ball contact, needs mu' above ~(7/2)(1+e)/(7/2)+..: none for 0.55.
     assert_eq!(regime::psi_limit_table_after_stick(0.88, 0.6, 0.55), None);
     let s = regime::psi_limit_table_after_stick(0.5, 0.3, 4.0).unwrap();
-    assert!(regime::table_margin(&Shot::rolling(s - 1e-6), &Coefficients::new(0.5, 0.3, 4.0), true) > 0.0);
+    assert!(
+        regime::table_margin(
+            &Shot::rolling(s - 1e-6),
+            &Coefficients::new(0.5, 0.3, 4.0),
+            true
+        ) > 0.0
+    );
 }
 
 #[test]
 fn auto_regime_matches_impulse_model_stick_tests() {
-    for &(e, mu, mt, m0) in &[(0.97, 0.07, 0.15, 0.07), (0.92, 0.14, 0.15, 0.18), (0.88, 0.6, 0.55, 0.6), (0.5, 0.3, 0.5, 0.3), (0.6, 0.5, 3.0, 0.6)] {
+    for &(e, mu, mt, m0) in &[
+        (0.97, 0.07, 0.15, 0.07),
+        (0.92, 0.14, 0.15, 0.18),
+        (0.88, 0.6, 0.55, 0.6),
+        (0.5, 0.3, 0.5, 0.3),
+        (0.6, 0.5, 3.0, 0.6),
+    ] {
         let c = Coefficients::new(e, mu, mt).with_static(m0);
         for i in 0..90 {
             for r in [-2.0, -0.5, 0.0, 0.5, 1.0, 3.0] {
                 for s in [-0.5, 0.0, 0.3] {
                     let sh = shot(i as f64, 1.0, r, s);
                     let (bb, tb) = impulse::stick_tests(&sh, &c);
-                    assert_eq!(regime::select_regime(&sh, &c), Regime::from_contacts(bb, tb), "{sh:?} {c:?}");
+                    assert_eq!(
+                        regime::select_regime(&sh, &c),
+                        Regime::from_contacts(bb, tb),
+                        "{sh:?} {c:?}"
+                    );
                 }
             }
         }
@@ -177,8 +229,16 @@ fn grid() -> Vec<(Shot, Coefficients)> {
         for m in [0.0, 0.3, 1.0, 2.5] {
             for r in [-1.5, -0.3, 0.0, 0.6, 1.0, 2.5] {
                 for s in [-0.6, 0.0, 0.25] {
-                    for (e, mu, mt, m0) in [(0.97, 0.07, 0.15, 0.07), (0.5, 0.3, 0.5, 0.4), (0.88, 0.6, 2.5, 0.6), (1.0, 0.0, 0.0, 0.0)] {
-                        out.push((shot(psi, m, r, s), Coefficients::new(e, mu, mt).with_static(m0)));
+                    for (e, mu, mt, m0) in [
+                        (0.97, 0.07, 0.15, 0.07),
+                        (0.5, 0.3, 0.5, 0.4),
+                        (0.88, 0.6, 2.5, 0.6),
+                        (1.0, 0.0, 0.0, 0.0),
+                    ] {
+                        out.push((
+                            shot(psi, m, r, s),
+                            Coefficients::new(e, mu, mt).with_static(m0),
+                        ));
                     }
                 }
             }
@@ -196,7 +256,12 @@ fn closed_forms_agree_with_impulse_model_in_every_regime() {
             let st = impulse::solve(&sh, &c, RegimeChoice::Fixed(regime));
             let a = st.angles();
             let b = closed::angles(&sh, &c, regime);
-            let speeds = [st.v1.xy().norm(), st.v2.xy().norm(), st.v1_roll.norm(), st.v2_roll.norm()];
+            let speeds = [
+                st.v1.xy().norm(),
+                st.v2.xy().norm(),
+                st.v1_roll.norm(),
+                st.v2_roll.norm(),
+            ];
             for k in 0..4 {
                 let (x, y) = (a.as_array()[k], b.as_array()[k]);
                 // Ill-conditioned directions of near-stopped balls are compared only for definedness.
@@ -204,7 +269,11 @@ fn closed_forms_agree_with_impulse_model_in_every_regime() {
                     continue;
                 }
                 let (x, y) = (x.expect("impulse angle"), y.expect("closed angle"));
-                assert!(ang_diff(x, y).abs() < 1e-12, "{} {regime} (auto {auto}) {sh:?} {c:?}: {x} vs {y}", ShotAngles::NAMES[k]);
+                assert!(
+                    ang_diff(x, y).abs() < 1e-12,
+                    "{} {regime} (auto {auto}) {sh:?} {c:?}: {x} vs {y}",
+                    ShotAngles::NAMES[k]
+                );
                 compared += 1;
             }
         }
@@ -223,9 +292,21 @@ fn edge_angles_are_exact_and_finite() {
     assert!((deg(a.delta1) - 89.999).abs() < 1e-3);
     assert!(a.as_array().iter().all(|x| x.is_some_and(f64::is_finite)));
     // Head-on stun, e = 1, M = 1: the cue ball stops; its direction is undefined.
-    let st = impulse::solve(&shot(0.0, 1.0, 0.0, 0.0), &Coefficients::new(1.0, 0.07, 0.15), RegimeChoice::Auto);
+    let st = impulse::solve(
+        &shot(0.0, 1.0, 0.0, 0.0),
+        &Coefficients::new(1.0, 0.07, 0.15),
+        RegimeChoice::Auto,
+    );
     assert_eq!(st.angles().delta1, None);
-    assert_eq!(closed::angles(&shot(0.0, 1.0, 0.0, 0.0), &Coefficients::new(1.0, 0.07, 0.15), st.regime).delta1, None);
+    assert_eq!(
+        closed::angles(
+            &shot(0.0, 1.0, 0.0, 0.0),
+            &Coefficients::new(1.0, 0.07, 0.15),
+            st.regime
+        )
+        .delta1,
+        None
+    );
     // M = 0: the object ball (a heavy plate) does not move.
     let st = impulse::solve(&shot(30.0, 0.0, 1.0, 0.0), &c, RegimeChoice::Auto);
     assert_eq!((st.angles().delta2, st.angles().theta2), (None, None));
@@ -236,9 +317,22 @@ fn printed_eq40_fails_heavy_ball_limit_and_derived_form_passes() {
     // Eq. (40) as printed: [(M + 5/7) + (2/5) r] tan psi / [M - e + ((2/5)(1+M) - (2/7) k) r].
     let (m, e, mu, r, psi) = (1e6, 0.9, 0.2, 1.0, 40.0 * DEG);
     let k = 1.0 + 2.0 / 7.0 * mu * psi.cos();
-    let printed = (((m + 5.0 / 7.0) + 0.4 * r) * psi.tan()) / (m - e + (0.4 * (1.0 + m) - 2.0 / 7.0 * k) * r);
-    assert!((printed.atan() - psi).abs() > 0.05, "printed form passes unexpectedly");
-    let derived = closed::angles(&Shot { psi, mass_ratio: m, spin: r, english: 0.0 }, &Coefficients::new(e, mu, 0.1), Regime::SlipMu);
+    let printed =
+        (((m + 5.0 / 7.0) + 0.4 * r) * psi.tan()) / (m - e + (0.4 * (1.0 + m) - 2.0 / 7.0 * k) * r);
+    assert!(
+        (printed.atan() - psi).abs() > 0.05,
+        "printed form passes unexpectedly"
+    );
+    let derived = closed::angles(
+        &Shot {
+            psi,
+            mass_ratio: m,
+            spin: r,
+            english: 0.0,
+        },
+        &Coefficients::new(e, mu, 0.1),
+        Regime::SlipMu,
+    );
     assert!((derived.theta1.unwrap() - psi).abs() < 1e-5);
 }
 
@@ -246,7 +340,11 @@ fn printed_eq40_fails_heavy_ball_limit_and_derived_form_passes() {
 fn energy_does_not_increase_for_table_one_materials_or_the_test_grid() {
     for (sh, c) in grid() {
         let st = impulse::solve(&sh, &c, RegimeChoice::Auto);
-        assert!(!st.gains_energy(), "energy gain {:?} {c:?} {sh:?}", st.energy_after / st.energy_before);
+        assert!(
+            !st.gains_energy(),
+            "energy gain {:?} {c:?} {sh:?}",
+            st.energy_after / st.energy_before
+        );
     }
     for c in [
         Coefficients::new(0.97, 0.07, 0.15),
@@ -257,7 +355,10 @@ fn energy_does_not_increase_for_table_one_materials_or_the_test_grid() {
             for r in [-2.0, -1.0, -0.3, 0.0, 0.5, 1.0, 2.0] {
                 for s in [-0.5, -0.2, 0.0, 0.2, 0.5] {
                     let st = impulse::solve(&shot(i as f64, 1.0, r, s), &c, RegimeChoice::Auto);
-                    assert!(st.energy_after <= st.energy_before * (1.0 + 1e-12), "{c:?} psi {i} r {r} s {s}");
+                    assert!(
+                        st.energy_after <= st.energy_before * (1.0 + 1e-12),
+                        "{c:?} psi {i} r {r} s {s}"
+                    );
                 }
             }
         }
@@ -280,7 +381,11 @@ fn slip_stick_torque_rules_can_create_energy_and_it_is_reported() {
     assert_eq!(st.regime, Regime::SlipMu);
     assert!(st.gains_energy());
     // Forcing gross slip where the friction limit would stop the slip reverses it: energy appears.
-    let st = impulse::solve(&shot(1.0, 0.0, 0.0, 0.0), &c, RegimeChoice::Fixed(Regime::MuMu));
+    let st = impulse::solve(
+        &shot(1.0, 0.0, 0.0, 0.0),
+        &c,
+        RegimeChoice::Fixed(Regime::MuMu),
+    );
     assert!(st.gains_energy());
 }
 
@@ -311,7 +416,10 @@ fn rebound_on_heavy_plate() {
     assert_eq!(rebound::rebound_regime(3.5 * 1.8 + 1e-9, e), Regime::MuMu);
     // Slopes of Fig. 6: 1 in gross slip, -(10/49) mu in slip–stick.
     assert!((rebound::slip_line(10.0, e) - rebound::slip_line(9.0, e) - 1.0).abs() < 1e-12);
-    assert!((rebound::stick_line(2.0, mu) - rebound::stick_line(1.0, mu) + 10.0 / 49.0 * mu).abs() < 1e-12);
+    assert!(
+        (rebound::stick_line(2.0, mu) - rebound::stick_line(1.0, mu) + 10.0 / 49.0 * mu).abs()
+            < 1e-12
+    );
 }
 
 #[test]
@@ -321,8 +429,17 @@ fn paths_end_tangent_to_the_rolling_line() {
     let c = Coefficients::new(0.97, 0.07, 0.15);
     let st = impulse::solve(&shot(45.0, 1.0, 1.0, 0.0), &c, RegimeChoice::Auto);
     let (v0, radius) = (0.75, 0.028575);
-    let cloth = Cloth { mu_slide: 0.2, mu_roll: 0.01 };
-    let p = BallPath::new(Vector2::zeros(), st.v1 * v0, st.w1 * (v0 / radius), radius, &cloth);
+    let cloth = Cloth {
+        mu_slide: 0.2,
+        mu_roll: 0.01,
+    };
+    let p = BallPath::new(
+        Vector2::zeros(),
+        st.v1 * v0,
+        st.w1 * (v0 / radius),
+        radius,
+        &cloth,
+    );
     // Start tangent = delta1, final direction = theta1.
     assert!(ang_diff(p.v0.y.atan2(p.v0.x), st.angles().delta1.unwrap()).abs() < 1e-12);
     let vr = p.velocity(p.t_slide + 0.1);
@@ -354,29 +471,76 @@ proptest! {
 }
 
 fn streakfit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_streakfit")).args(args).output().unwrap();
-    (out.status.code().unwrap(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    let out = Command::new(env!("CARGO_BIN_EXE_streakfit"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }
 
 #[test]
 fn predict_prints_json_with_exactly_the_documented_keys() {
-    let (code, out, _) = streakfit(&["predict", "--psi", "45", "--e", "0.97", "--mu", "0.07", "--mu-table", "0.15", "--json"]);
+    let (code, out, _) = streakfit(&[
+        "predict",
+        "--psi",
+        "45",
+        "--e",
+        "0.97",
+        "--mu",
+        "0.07",
+        "--mu-table",
+        "0.15",
+        "--json",
+    ]);
     assert_eq!(code, 0);
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let mut keys: Vec<_> = v.as_object().unwrap().keys().cloned().collect();
     keys.sort();
-    assert_eq!(keys, ["delta1_deg", "delta2_deg", "psi_deg", "regime", "theta1_deg", "theta2_deg"]);
+    assert_eq!(
+        keys,
+        [
+            "delta1_deg",
+            "delta2_deg",
+            "psi_deg",
+            "regime",
+            "theta1_deg",
+            "theta2_deg"
+        ]
+    );
     assert_eq!(v["regime"], "mu-mu");
-    let expect = closed::angles(&Shot::rolling(45.0 * DEG), &Coefficients::new(0.97, 0.07, 0.15), Regime::MuMu);
+    let expect = closed::angles(
+        &Shot::rolling(45.0 * DEG),
+        &Coefficients::new(0.97, 0.07, 0.15),
+        Regime::MuMu,
+    );
     assert!((v["theta1_deg"].as_f64().unwrap() - deg(expect.theta1)).abs() < 1e-9);
 }
 
 #[test]
 fn predict_range_and_bad_input() {
-    let (code, out, _) = streakfit(&["predict", "--psi", "0:85:5", "--e", "0.92", "--mu", "0.14", "--mu-table", "0.15", "--mu-static", "0.18"]);
+    let (code, out, _) = streakfit(&[
+        "predict",
+        "--psi",
+        "0:85:5",
+        "--e",
+        "0.92",
+        "--mu",
+        "0.14",
+        "--mu-table",
+        "0.15",
+        "--mu-static",
+        "0.18",
+    ]);
     assert_eq!(code, 0);
     assert_eq!(out.lines().count(), 1 + 18);
-    assert!(out.lines().nth(1).unwrap().contains("s-mu") && out.lines().last().unwrap().contains("mu-mu"));
+    assert!(
+        out.lines().nth(1).unwrap().contains("s-mu")
+            && out.lines().last().unwrap().contains("mu-mu")
+    );
     for bad in [
         vec!["--psi", "45", "--e", "-0.1"],
         vec!["--psi", "45", "--e", "1.2"],
@@ -393,6 +557,27 @@ fn predict_range_and_bad_input() {
         assert_eq!(code, 2, "{bad:?}: {out} {err}");
         assert!(out.is_empty() && !err.is_empty(), "{bad:?}");
     }
-    let (_, out, _) = streakfit(&["predict", "--psi", "0", "--e", "1", "--mu", "0.07", "--mu-table", "0.15", "--spin", "0"]);
+    let (_, out, _) = streakfit(&[
+        "predict",
+        "--psi",
+        "0",
+        "--e",
+        "1",
+        "--mu",
+        "0.07",
+        "--mu-table",
+        "0.15",
+        "--spin",
+        "0",
+    ]);
     assert!(out.lines().nth(1).unwrap().contains("undefined"));
+}
+
+#[test]
+fn fast_auto_path_matches_regime_selection_and_closed_forms() {
+    for (sh, c) in grid() {
+        let (r, a) = closed::predict_auto(&sh, &c);
+        assert_eq!(r, regime::select_regime(&sh, &c));
+        assert_eq!(a, closed::angles(&sh, &c, r));
+    }
 }

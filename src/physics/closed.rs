@@ -38,7 +38,7 @@ impl ContactTerms {
         let (sin_psi, cos_psi) = shot.psi.sin_cos();
         let gy = sin_psi + shot.english;
         let gz = shot.spin * cos_psi;
-        let g = gy.hypot(gz);
+        let g = (gy * gy + gz * gz).sqrt();
         let (sin_sigma, cos_sigma) = if g > 0.0 {
             (gy / g, gz / g)
         } else {
@@ -97,15 +97,23 @@ impl Tangent {
 
 /// `tan delta1`: Eq. (22) (gross slip) or Eq. (35) (slip–stick), times `cos psi`.
 pub fn tan_delta1(shot: &Shot, c: &Coefficients, regime: Regime) -> Tangent {
+    delta1_of(
+        shot,
+        c,
+        regime,
+        &ContactTerms::new(shot, c, regime.ball_ball_stick()),
+    )
+}
+
+fn delta1_of(shot: &Shot, c: &Coefficients, regime: Regime, ct: &ContactTerms) -> Tangent {
     let m = shot.mass_ratio;
-    let (sp, cp) = shot.psi.sin_cos();
+    let (sp, cp) = (ct.sin_psi, ct.cos_psi);
     if regime.ball_ball_stick() {
         Tangent {
             num: (m + 5.0 / 7.0) * sp - TWO_SEVENTHS * shot.english,
             den: (m - c.e) * cp,
         }
     } else {
-        let ct = ContactTerms::new(shot, c, false);
         Tangent {
             num: (1.0 + m) * sp - c.mu * (1.0 + c.e) * ct.sin_sigma * cp,
             den: (m - c.e) * cp,
@@ -116,17 +124,24 @@ pub fn tan_delta1(shot: &Shot, c: &Coefficients, regime: Regime) -> Tangent {
 /// `tan theta1`: Eq. (24) (gross slip) or Eq. (40) corrected (slip–stick), times `cos psi`.
 /// Eq. (40) as printed lacks the factor `(1+M)` on the spin term of its numerator.
 pub fn tan_theta1(shot: &Shot, c: &Coefficients, regime: Regime) -> Tangent {
+    theta1_of(
+        shot,
+        c,
+        regime,
+        &ContactTerms::new(shot, c, regime.ball_ball_stick()),
+    )
+}
+
+fn theta1_of(shot: &Shot, c: &Coefficients, regime: Regime, ct: &ContactTerms) -> Tangent {
     let m = shot.mass_ratio;
     let r = shot.spin;
-    let (sp, cp) = shot.psi.sin_cos();
+    let (sp, cp) = (ct.sin_psi, ct.cos_psi);
     if regime.ball_ball_stick() {
-        let k = ContactTerms::new(shot, c, true).k;
         Tangent {
             num: ((m + 5.0 / 7.0) + 0.4 * (1.0 + m) * r) * sp - TWO_SEVENTHS * shot.english,
-            den: (m - c.e + 0.4 * (1.0 + m) * r - TWO_SEVENTHS * k * r) * cp,
+            den: (m - c.e + 0.4 * (1.0 + m) * r - TWO_SEVENTHS * ct.k * r) * cp,
         }
     } else {
-        let ct = ContactTerms::new(shot, c, false);
         let muf = c.mu * (1.0 + c.e);
         Tangent {
             num: (1.0 + m) * (2.5 + r) * sp - 2.5 * muf * ct.sin_sigma * cp,
@@ -138,10 +153,18 @@ pub fn tan_theta1(shot: &Shot, c: &Coefficients, regime: Regime) -> Tangent {
 /// `tan delta2` for each regime: Eq. (23) (mu–mu), Eq. (39) corrected (s–mu: no `mu` term),
 /// Eq. (44) (s–s), Eq. (48) (mu–s). Table friction acts only while ball 2 is pressed down.
 pub fn tan_delta2(shot: &Shot, c: &Coefficients, regime: Regime) -> Tangent {
-    let (sp, cp) = shot.psi.sin_cos();
-    let ct = ContactTerms::new(shot, c, regime.ball_ball_stick());
+    delta2_of(
+        shot,
+        c,
+        regime,
+        &ContactTerms::new(shot, c, regime.ball_ball_stick()),
+    )
+}
+
+fn delta2_of(shot: &Shot, c: &Coefficients, regime: Regime, ct: &ContactTerms) -> Tangent {
+    let (sp, cp) = (ct.sin_psi, ct.cos_psi);
     let (cx, cy) = ct.table_slip();
-    let cn = cx.hypot(cy);
+    let cn = (cx * cx + cy * cy).sqrt();
     let (sin_phi, cos_phi) = if cn > 0.0 {
         (cy / cn, cx / cn)
     } else {
@@ -178,57 +201,73 @@ pub fn tan_delta2(shot: &Shot, c: &Coefficients, regime: Regime) -> Tangent {
 /// `tan theta2` for each regime: Eq. (25) (mu–mu), Eq. (41) corrected (s–mu, with the
 /// `cos sigma` of Eq. 36), and the derived mu–s and s–s forms that replace Eqs. (49) and (45).
 pub fn tan_theta2(shot: &Shot, c: &Coefficients, regime: Regime) -> Tangent {
-    let (sp, cp) = shot.psi.sin_cos();
+    theta2_of(
+        shot,
+        c,
+        regime,
+        &ContactTerms::new(shot, c, regime.ball_ball_stick()),
+    )
+}
+
+fn theta2_of(shot: &Shot, c: &Coefficients, regime: Regime, ct: &ContactTerms) -> Tangent {
+    let (sp, cp) = (ct.sin_psi, ct.cos_psi);
     let r = shot.spin;
     // (7/2) times the table-stick factor (25 + 10 k_t)/35 with k_t = 1 + (2/7) mu'.
     let kt = 3.5 + TWO_SEVENTHS * c.mu_table;
     let back = 3.5 - (5.0 / 7.0) * c.mu_table;
     match regime {
-        Regime::MuMu => {
-            let ct = ContactTerms::new(shot, c, false);
-            Tangent {
-                num: c.mu * ct.sin_sigma,
-                den: 1.0 - c.mu * ct.cos_sigma,
-            }
-        }
-        Regime::SlipMu => {
-            let k = ContactTerms::new(shot, c, true).k;
-            Tangent {
-                num: sp + shot.english,
-                den: (3.5 * (1.0 + c.e) - k * r) * cp,
-            }
-        }
-        Regime::MuSlip => {
-            let ct = ContactTerms::new(shot, c, false);
-            Tangent {
-                num: kt * c.mu * ct.sin_sigma,
-                den: kt - back * c.mu * ct.cos_sigma,
-            }
-        }
-        Regime::SlipSlip => {
-            let k = ContactTerms::new(shot, c, true).k;
-            Tangent {
-                num: kt * (sp + shot.english),
-                den: (3.5 * (1.0 + c.e) * kt - back * k * r) * cp,
-            }
-        }
+        Regime::MuMu => Tangent {
+            num: c.mu * ct.sin_sigma,
+            den: 1.0 - c.mu * ct.cos_sigma,
+        },
+        Regime::SlipMu => Tangent {
+            num: sp + shot.english,
+            den: (3.5 * (1.0 + c.e) - ct.k * r) * cp,
+        },
+        Regime::MuSlip => Tangent {
+            num: kt * c.mu * ct.sin_sigma,
+            den: kt - back * c.mu * ct.cos_sigma,
+        },
+        Regime::SlipSlip => Tangent {
+            num: kt * (sp + shot.english),
+            den: (3.5 * (1.0 + c.e) * kt - back * ct.k * r) * cp,
+        },
     }
+}
+
+/// The auto regime and its four angles, sharing one evaluation of the contact terms: the fast
+/// path used inside fits.
+pub fn predict_auto(shot: &Shot, c: &Coefficients) -> (Regime, ShotAngles) {
+    let bb = super::regime::ball_ball_sticks(shot, c);
+    let ct = ContactTerms::new(shot, c, bb);
+    let table = super::regime::table_margin_of(shot, c, &ct) >= 0.0;
+    let regime = Regime::from_contacts(bb, table);
+    (regime, angles_of(shot, c, regime, &ct))
 }
 
 /// All four angles from the closed forms in the given regime. For `M = 0` ball 2 does not move
 /// and its angles are undefined.
 pub fn angles(shot: &Shot, c: &Coefficients, regime: Regime) -> ShotAngles {
+    angles_of(
+        shot,
+        c,
+        regime,
+        &ContactTerms::new(shot, c, regime.ball_ball_stick()),
+    )
+}
+
+fn angles_of(shot: &Shot, c: &Coefficients, regime: Regime, ct: &ContactTerms) -> ShotAngles {
     let ball2 = shot.mass_ratio > 0.0;
     ShotAngles {
-        delta1: tan_delta1(shot, c, regime).angle(),
-        theta1: tan_theta1(shot, c, regime).angle(),
+        delta1: delta1_of(shot, c, regime, ct).angle(),
+        theta1: theta1_of(shot, c, regime, ct).angle(),
         delta2: if ball2 {
-            tan_delta2(shot, c, regime).angle()
+            delta2_of(shot, c, regime, ct).angle()
         } else {
             None
         },
         theta2: if ball2 {
-            tan_theta2(shot, c, regime).angle()
+            theta2_of(shot, c, regime, ct).angle()
         } else {
             None
         },

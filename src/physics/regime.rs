@@ -21,7 +21,8 @@ pub fn ball_ball_sticks(shot: &Shot, c: &Coefficients) -> bool {
 /// `mu0 (1+e) cos psi - (2/7) g`: positive where the ball–ball contact sticks.
 pub fn ball_ball_margin(shot: &Shot, c: &Coefficients) -> f64 {
     let (sp, cp) = shot.psi.sin_cos();
-    let g = (sp + shot.english).hypot(shot.spin * cp);
+    let (gy, gz) = (sp + shot.english, shot.spin * cp);
+    let g = (gy * gy + gz * gz).sqrt();
     c.mu_static * (1.0 + c.e) * cp - TWO_SEVENTHS * g
 }
 
@@ -30,13 +31,17 @@ pub fn table_margin(shot: &Shot, c: &Coefficients, ball_ball_stick: bool) -> f64
     if shot.mass_ratio == 0.0 {
         return f64::NEG_INFINITY;
     }
-    let ct = ContactTerms::new(shot, c, ball_ball_stick);
+    table_margin_of(shot, c, &ContactTerms::new(shot, c, ball_ball_stick))
+}
+
+/// [`table_margin`] from already computed contact terms.
+pub fn table_margin_of(shot: &Shot, c: &Coefficients, ct: &ContactTerms) -> f64 {
     let n = ct.table_normal();
-    if n <= 0.0 {
+    if shot.mass_ratio == 0.0 || n <= 0.0 {
         return f64::NEG_INFINITY;
     }
     let (cx, cy) = ct.table_slip();
-    c.mu_table * n - TWO_SEVENTHS * cx.hypot(cy)
+    c.mu_table * n - TWO_SEVENTHS * (cx * cx + cy * cy).sqrt()
 }
 
 /// The regime the stick/slip conditions select (the `auto` choice).

@@ -221,7 +221,8 @@ pub const SPEED_EPS: f64 = 1e-9;
 
 /// Direction of a horizontal vector `(x, y)`, or `None` if it is (numerically) zero.
 pub fn direction(x: f64, y: f64, scale: f64) -> Option<f64> {
-    if x.hypot(y) <= SPEED_EPS * scale.max(f64::MIN_POSITIVE) {
+    let eps = SPEED_EPS * scale.max(f64::MIN_POSITIVE);
+    if x * x + y * y <= eps * eps {
         None
     } else {
         Some(y.atan2(x))
