@@ -92,7 +92,8 @@ pub fn predict_rows(args: &PredictArgs) -> Result<Vec<PredictRow>, CliError> {
         };
         shot.validate().map_err(CliError::usage)?;
         let state = impulse::solve(&shot, &coeffs, choice);
-        let [d1, d2, t1, t2] = state.angles().to_degrees();
+        // `+ 0.0` turns -0.0 into 0.0 so a head-on shot prints 0, not -0.
+        let [d1, d2, t1, t2] = state.angles().to_degrees().map(|a| a.map(|v| v + 0.0));
         rows.push(PredictRow {
             psi_deg,
             regime: state.regime.to_string(),
