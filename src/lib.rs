@@ -11,4 +11,6 @@
 pub mod cli;
 pub mod physics;
 pub mod predict;
+pub mod scene;
+pub mod synth;
 pub mod table;

@@ -20,6 +20,8 @@ struct Cli {
 enum Command {
     /// Theory: post-collision and post-transition angles for given coefficients.
     Predict(streakfit::predict::PredictArgs),
+    /// Synthetic long-exposure shot photographs with exact ground truth.
+    Synth(streakfit::synth::SynthArgs),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +38,7 @@ fn main() -> ExitCode {
     };
     let result: CliResult = match &cli.command {
         Command::Predict(a) => streakfit::predict::run(a),
+        Command::Synth(a) => streakfit::synth::run(a),
     };
     match result {
         Ok(outcome) => outcome.exit_code(),
