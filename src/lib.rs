@@ -10,7 +10,9 @@
 
 pub mod cli;
 pub mod physics;
+pub mod pipeline;
 pub mod predict;
+pub mod report;
 pub mod scene;
 pub mod synth;
 pub mod table;

@@ -22,6 +22,8 @@ enum Command {
     Predict(streakfit::predict::PredictArgs),
     /// Synthetic long-exposure shot photographs with exact ground truth.
     Synth(streakfit::synth::SynthArgs),
+    /// Run a pipeline (synth/extract/fit/report with caching), e.g. pipelines/demo.toml.
+    Run(streakfit::pipeline::RunArgs),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +41,7 @@ fn main() -> ExitCode {
     let result: CliResult = match &cli.command {
         Command::Predict(a) => streakfit::predict::run(a),
         Command::Synth(a) => streakfit::synth::run(a),
+        Command::Run(a) => streakfit::pipeline::run(a),
     };
     match result {
         Ok(outcome) => outcome.exit_code(),
