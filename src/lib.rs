@@ -9,6 +9,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod cli;
+pub mod fit;
 pub mod physics;
 pub mod pipeline;
 pub mod predict;

@@ -24,6 +24,8 @@ enum Command {
     Synth(streakfit::synth::SynthArgs),
     /// Run a pipeline (synth/extract/fit/report with caching), e.g. pipelines/demo.toml.
     Run(streakfit::pipeline::RunArgs),
+    /// Fit material coefficients (e, mu, mu', mu0) with uncertainties and model selection.
+    Fit(streakfit::fit::FitArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
         Command::Predict(a) => streakfit::predict::run(a),
         Command::Synth(a) => streakfit::synth::run(a),
         Command::Run(a) => streakfit::pipeline::run(a),
+        Command::Fit(a) => streakfit::fit::run(a),
     };
     match result {
         Ok(outcome) => outcome.exit_code(),

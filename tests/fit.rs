@@ -1,0 +1,299 @@
+//! `streakfit fit` on synthetic tables made from the theory (paper's Table 1 values).
+
+use streakfit::fit::synthetic::{SyntheticSpec, SyntheticSpin, paper_materials, synthetic_table};
+use streakfit::fit::{FitArgs, FitOptions, MaterialFit, SpinMode, fit_materials};
+use streakfit::physics::Coefficients;
+use streakfit::table::{ShotRow, write_angle_table};
+
+fn spec(material: &str, c: Coefficients, n: usize, seed: u64) -> SyntheticSpec {
+    SyntheticSpec {
+        material: material.into(),
+        coefficients: c,
+        n,
+        psi_lo_deg: 10.0,
+        psi_hi_deg: 70.0,
+        noise_deg: 0.3,
+        spin: SyntheticSpin::Rolling,
+        seed,
+    }
+}
+
+fn fit_one(rows: &[ShotRow], opts: &FitOptions) -> MaterialFit {
+    let out = fit_materials(rows, opts).unwrap();
+    assert_eq!(out.fits.len(), 1);
+    out.fits.into_iter().next().unwrap()
+}
+
+#[test]
+fn reproduces_the_papers_regime_findings() {
+    let [(_, billiard), (_, steel), (_, rubber)] = paper_materials();
+    // Billiard balls: gross slip only; mu' not identified (cancels from theta2).
+    let (rows, _) = synthetic_table(&spec("billiard", billiard, 30, 11));
+    let f = fit_one(&rows, &FitOptions::default());
+    assert_eq!(f.model, "mu-mu", "{:?}", f.scores);
+    assert!((f.e.unwrap() - 0.97).abs() < 0.02, "e {:?}", f.e);
+    assert!((f.mu.unwrap() - 0.07).abs() < 0.01, "mu {:?}", f.mu);
+    assert_eq!(f.mu_table, None);
+    assert_eq!(f.mu_table_se, None);
+    assert!(!f.identified.contains(&"mu_table".to_string()));
+    assert!(f.unidentified.contains_key("mu_table"));
+    assert_eq!(f.scores.len(), 5);
+    assert!(f.mu_static.is_none() && f.psi_l_deg.is_none());
+
+    // Steel: the jump of Fig. 12 near 34° (Eq. 50 with mu0 = 0.18, e = 0.92).
+    let (rows, _) = synthetic_table(&spec("steel", steel, 30, 12));
+    let f = fit_one(&rows, &FitOptions::default());
+    assert_eq!(f.model, "two-regime", "{:?}", f.scores);
+    let mu0 = f.mu_static.unwrap();
+    assert!((mu0 - 0.18).abs() < 0.01, "mu0 {mu0}");
+    let psi_l = f.psi_l_deg.unwrap();
+    assert!((psi_l - 34.2).abs() < 3.0, "psi_L {psi_l}");
+    assert!((f.e.unwrap() - 0.92).abs() < 0.01);
+    assert!((f.mu.unwrap() - 0.14).abs() < 0.01);
+    let two = f.scores.iter().find(|s| s.model == "two-regime").unwrap();
+    let mumu = f.scores.iter().find(|s| s.model == "mu-mu").unwrap();
+    assert!(mumu.bic - two.bic > 10.0, "{:?}", f.scores);
+
+    // Rubber: slip–stick over the whole range; mu0 = mu = 0.6 would put psi_L near 75°.
+    let (rows, _) = synthetic_table(&spec("rubber", rubber, 30, 13));
+    let f = fit_one(&rows, &FitOptions::default());
+    assert_eq!(f.model, "s-mu", "{:?}", f.scores);
+    let max_psi = rows.iter().filter_map(|r| r.psi_deg).fold(0.0, f64::max);
+    assert!(
+        (f.psi_l_min_deg.unwrap() - max_psi).abs() < 1.0,
+        "{:?}",
+        f.psi_l_min_deg
+    );
+    let note = f.notes.iter().find(|n| n.contains("Eq. (50)")).unwrap();
+    let psi_l_eq50: f64 = note
+        .rsplit("at ")
+        .next()
+        .unwrap()
+        .trim_end_matches('°')
+        .parse()
+        .unwrap();
+    assert!((psi_l_eq50 - 75.0).abs() < 3.0, "{note}");
+    assert!((f.e.unwrap() - 0.88).abs() < 0.01);
+    assert!((f.mu.unwrap() - 0.60).abs() < 0.1);
+    // mu' shows in delta2 of s–mu shots; with 30 shots it is only just identified (≈ 25%).
+    if let (Some(mt), Some(se)) = (f.mu_table, f.mu_table_se) {
+        assert!((mt - 0.55).abs() < 3.0 * se, "mu' {mt} ± {se}");
+    }
+    assert!(
+        f.notes.iter().any(|n| n.contains("Eq. (50)")),
+        "{:?}",
+        f.notes
+    );
+}
+
+/// Coverage over 50 seeds for each of the paper's materials: every identified parameter lies
+/// within its stated 2 sigma of the truth in at least 90% of seeds.
+#[test]
+fn two_sigma_coverage_over_fifty_seeds() {
+    let opts = FitOptions {
+        bootstrap: 0,
+        ..FitOptions::default()
+    };
+    for (name, c) in paper_materials() {
+        let truth = [c.e, c.mu, c.mu_table, c.mu_static];
+        let (mut inside, mut total) = ([0usize; 4], [0usize; 4]);
+        let mut worst_e: f64 = 0.0;
+        for seed in 0..50 {
+            let (rows, _) = synthetic_table(&spec(name, c, 30, 1000 + seed));
+            let f = fit_one(&rows, &opts);
+            let est = [
+                (f.e, f.e_se),
+                (f.mu, f.mu_se),
+                (f.mu_table, f.mu_table_se),
+                (f.mu_static, f.mu_static_se),
+            ];
+            for k in 0..4 {
+                if let (Some(v), Some(se)) = est[k] {
+                    total[k] += 1;
+                    if (v - truth[k]).abs() <= 2.0 * se {
+                        inside[k] += 1;
+                    }
+                }
+            }
+            worst_e = worst_e.max((f.e.unwrap() - c.e).abs());
+        }
+        eprintln!("{name}: inside {inside:?} of {total:?}, worst |e error| {worst_e:.4}");
+        assert!(
+            total[0] == 50 && total[1] == 50,
+            "{name}: e, mu identified every time"
+        );
+        for k in 0..4 {
+            if total[k] >= 10 {
+                assert!(
+                    inside[k] as f64 >= 0.9 * total[k] as f64,
+                    "{name}: parameter {k} covered {} of {}",
+                    inside[k],
+                    total[k]
+                );
+            }
+        }
+        assert!(worst_e < 0.02, "{name}: e error {worst_e}");
+    }
+}
+
+#[test]
+fn bootstrap_agrees_with_jacobian_errors() {
+    let [(_, _), (_, _), (_, rubber)] = paper_materials();
+    let (rows, _) = synthetic_table(&spec("rubber", rubber, 40, 21));
+    let f = fit_one(&rows, &FitOptions::default());
+    let b = f.bootstrap.as_ref().unwrap();
+    assert_eq!(b.resamples, 100);
+    for (j, bs) in [(f.e_se, b.e_se), (f.mu_se, b.mu_se)] {
+        let ratio = bs.unwrap() / j.unwrap();
+        assert!((0.5..2.0).contains(&ratio), "bootstrap/Jacobian {ratio}");
+    }
+    assert_eq!(f.correlation.params.len(), f.correlation.matrix.len());
+    assert!((f.correlation.matrix[0][0] - 1.0).abs() < 1e-9);
+}
+
+#[test]
+fn gross_outlier_is_rejected() {
+    let [(_, billiard), _, _] = paper_materials();
+    let (mut rows, _) = synthetic_table(&spec("billiard", billiard, 30, 5));
+    rows[3].theta1_deg = rows[3].theta1_deg.map(|t| t + 15.0);
+    let out = fit_materials(&rows, &FitOptions::default()).unwrap();
+    let f = &out.fits[0];
+    assert_eq!(f.n_rejected, 1);
+    assert_eq!(f.n_used, 29);
+    assert!((f.e.unwrap() - 0.97).abs() < 0.02);
+    let r = out
+        .residuals
+        .iter()
+        .find(|r| r.file == rows[3].file)
+        .unwrap();
+    assert!(!r.used && r.rejected_reason.as_deref().unwrap().contains("outlier"));
+}
+
+#[test]
+fn cli_writes_json_csv_and_residuals_from_a_hand_made_table() {
+    let dir = std::env::temp_dir().join(format!("streakfit_fit_cli_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let [(_, billiard), _, (_, rubber)] = paper_materials();
+    // Hand-made CSV: only the required columns, two materials.
+    let mut text = String::from("material,psi_deg,delta1_deg,delta2_deg,theta1_deg,theta2_deg\n");
+    for (name, c, seed) in [("billiard", billiard, 1), ("rubber", rubber, 2)] {
+        let (rows, _) = synthetic_table(&spec(name, c, 25, seed));
+        for r in rows {
+            text.push_str(&format!(
+                "{name},{},{},{},{},{}\n",
+                r.psi_deg.unwrap(),
+                r.delta1_deg.unwrap(),
+                r.delta2_deg.unwrap(),
+                r.theta1_deg.unwrap(),
+                r.theta2_deg.unwrap()
+            ));
+        }
+    }
+    let table = dir.join("hand.csv");
+    std::fs::write(&table, text).unwrap();
+    let json = dir.join("fit.json");
+    let resid = dir.join("resid.csv");
+    let args = FitArgs {
+        tables: vec![table.clone()],
+        out: json.clone(),
+        residuals: Some(resid.clone()),
+        material: None,
+        regime: "auto".into(),
+        criterion: "bic".into(),
+        spin: "known".into(),
+        sigma_deg: 0.3,
+        psi_sigma_deg: 0.3,
+        mass_ratio: 1.0,
+        huber: None,
+        reject_sigma: 5.0,
+        bootstrap: 10,
+        seed: 1,
+    };
+    streakfit::fit::run(&args).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let arr = v.as_array().unwrap();
+    assert_eq!(arr.len(), 2);
+    for key in [
+        "material",
+        "model",
+        "e",
+        "e_se",
+        "mu",
+        "mu_se",
+        "mu_table",
+        "mu_table_se",
+        "mu_static",
+        "mu_static_se",
+        "psi_l_deg",
+        "n_used",
+        "n_rejected",
+        "identified",
+        "scores",
+        "rms_deg",
+        "correlation",
+    ] {
+        assert!(arr[0].get(key).is_some(), "missing key {key}");
+    }
+    assert_eq!(arr[0]["material"], "billiard");
+    assert_eq!(arr[0]["model"], "mu-mu");
+    assert!(arr[0]["mu_table"].is_null());
+    assert_eq!(arr[1]["model"], "s-mu");
+    assert_eq!(arr[1]["n_used"], 25);
+    let res = std::fs::read_to_string(&resid).unwrap();
+    assert_eq!(res.lines().count(), 51);
+    assert!(res.lines().next().unwrap().contains("theta1_resid_deg"));
+    // CSV output with the same columns.
+    let csv = dir.join("fit.csv");
+    streakfit::fit::run(&FitArgs {
+        out: csv.clone(),
+        residuals: None,
+        material: Some("rubber".into()),
+        ..args.clone()
+    })
+    .unwrap();
+    let c = std::fs::read_to_string(&csv).unwrap();
+    let header = c.lines().next().unwrap();
+    for key in [
+        "material",
+        "model",
+        "e_se",
+        "mu_table_se",
+        "psi_l_deg",
+        "identified",
+        "bic_two-regime",
+    ] {
+        assert!(
+            header.split(',').any(|h| h == key),
+            "csv lacks {key}: {header}"
+        );
+    }
+    assert_eq!(c.lines().count(), 2);
+    // Bad flag values are usage errors naming the flag.
+    let err = streakfit::fit::run(&FitArgs {
+        regime: "sticky".into(),
+        ..args.clone()
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains("--regime"), "{err}");
+    let err = streakfit::fit::run(&FitArgs {
+        material: Some("glass".into()),
+        ..args.clone()
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains("glass"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn angle_table_round_trip_feeds_the_fit() {
+    let dir = std::env::temp_dir().join(format!("streakfit_fit_pq_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let [_, (_, steel), _] = paper_materials();
+    let (rows, _) = synthetic_table(&spec("steel", steel, 30, 3));
+    let p = dir.join("angles.parquet");
+    write_angle_table(&p, &rows).unwrap();
+    let back = streakfit::table::read_angle_table(&p).unwrap();
+    assert_eq!(back, rows);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
