@@ -114,6 +114,40 @@ impl Backdrop {
         self.cloth_rgb.map(|c| c * m)
     }
 
+    /// Lit cloth without balls at pixel `(x, y)`: illumination × cloth albedo (DN). Stored as
+    /// `f32` so that [`Backdrop::base_plate`] and [`expected_at`] agree exactly.
+    pub fn base_at(&self, x: u32, y: u32) -> [f32; 3] {
+        let l = self.illumination(x as f64 + 0.5, y as f64 + 0.5);
+        self.cloth(x, y).map(|c| (l * c as f64) as f32)
+    }
+
+    /// [`Backdrop::base_at`] for every pixel (row-major RGB). The table is the same for every
+    /// shot of a folder, so this is computed once and shared.
+    pub fn base_plate(&self) -> Vec<f32> {
+        let w = self.width as usize;
+        let mut out = vec![0f32; w * self.height as usize * 3];
+        out.par_chunks_mut(w * 3).enumerate().for_each(|(y, row)| {
+            // Same arithmetic as `base_at`, with the lattice hashes of the two noise octaves
+            // cached along the row (they change only every 90 and 11 pixels).
+            let yf = y as f32;
+            let mut coarse = NoiseRow::new(yf / 90.0, self.texture_seed);
+            let mut fine = NoiseRow::new(yf / 11.0, self.texture_seed ^ 0x9e37);
+            let py = y as f64 + 0.5;
+            for x in 0..w {
+                let xf = x as f32;
+                let t = 0.55 * coarse.at(xf / 90.0)
+                    + 0.3 * fine.at(xf / 11.0)
+                    + 0.25 * hash01(x as i64, y as i64, self.texture_seed ^ 0x51ed);
+                let m = 1.0 + self.texture * t;
+                let l = self.illumination(x as f64 + 0.5, py);
+                for c in 0..3 {
+                    row[x * 3 + c] = (l * (self.cloth_rgb[c] * m) as f64) as f32;
+                }
+            }
+        });
+        out
+    }
+
     fn light_unit(&self) -> [f64; 3] {
         let [x, y, z] = self.light;
         let n = (x * x + y * y + z * z).sqrt();
@@ -134,12 +168,12 @@ fn hash01(x: i64, y: i64, seed: u64) -> f32 {
     (h >> 40) as f32 / (1u64 << 23) as f32 - 1.0
 }
 
-/// Smooth value noise in [-1, 1] (bilinear with smoothstep weights).
+/// Smooth value noise in [-1, 1] (bilinear with smoothstep weights), for `x, y ≥ 0`
+/// (truncation is the floor there, and much cheaper than a libm call).
 fn value_noise(x: f32, y: f32, seed: u64) -> f32 {
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
+    let (ix, iy) = (x as i64, y as i64);
+    let (fx, fy) = (x - ix as f32, y - iy as f32);
     let (sx, sy) = (fx * fx * (3.0 - 2.0 * fx), fy * fy * (3.0 - 2.0 * fy));
-    let (ix, iy) = (x0 as i64, y0 as i64);
     let v00 = hash01(ix, iy, seed);
     let v10 = hash01(ix + 1, iy, seed);
     let v01 = hash01(ix, iy + 1, seed);
@@ -147,6 +181,49 @@ fn value_noise(x: f32, y: f32, seed: u64) -> f32 {
     let a = v00 + sx * (v10 - v00);
     let b = v01 + sx * (v11 - v01);
     a + sy * (b - a)
+}
+
+/// [`value_noise`] along one row, caching the lattice values of the current cell.
+struct NoiseRow {
+    iy: i64,
+    sy: f32,
+    seed: u64,
+    ix: i64,
+    corners: [f32; 4],
+}
+
+impl NoiseRow {
+    fn new(y: f32, seed: u64) -> Self {
+        let iy = y as i64;
+        let fy = y - iy as f32;
+        NoiseRow {
+            iy,
+            sy: fy * fy * (3.0 - 2.0 * fy),
+            seed,
+            ix: i64::MIN,
+            corners: [0.0; 4],
+        }
+    }
+
+    /// Equals `value_noise(x, y, seed)` bit for bit.
+    fn at(&mut self, x: f32) -> f32 {
+        let ix = x as i64;
+        if ix != self.ix {
+            self.ix = ix;
+            self.corners = [
+                hash01(ix, self.iy, self.seed),
+                hash01(ix + 1, self.iy, self.seed),
+                hash01(ix, self.iy + 1, self.seed),
+                hash01(ix + 1, self.iy + 1, self.seed),
+            ];
+        }
+        let fx = x - ix as f32;
+        let sx = fx * fx * (3.0 - 2.0 * fx);
+        let [v00, v10, v01, v11] = self.corners;
+        let a = v00 + sx * (v10 - v00);
+        let b = v01 + sx * (v11 - v01);
+        a + self.sy * (b - a)
+    }
 }
 
 /// Diffuse shading (ambient + Lambert) and specular term of a resting ball at relative position
@@ -264,18 +341,27 @@ fn accumulate_band(frame: &Frame, bd: &Backdrop, y0: usize, rows: usize, acc: &m
     }
 }
 
-/// Expected (noise-free) value of one pixel from its accumulated ball light.
+/// Expected (noise-free) value of one pixel from the lit cloth `base` and its accumulated ball
+/// light.
 #[inline]
-fn compose(bd: &Backdrop, x: u32, y: u32, a: &Acc) -> [f64; 3] {
+fn compose(bd: &Backdrop, base: &[f32], x: u32, y: u32, a: &Acc) -> [f64; 3] {
+    if a.alpha <= 0.0 {
+        return [base[0] as f64, base[1] as f64, base[2] as f64];
+    }
     let l = bd.illumination(x as f64 + 0.5, y as f64 + 0.5);
-    let cloth = bd.cloth(x, y);
-    let keep = (1.0 - a.alpha).max(0.0);
-    [0, 1, 2].map(|c| l * (cloth[c] * keep + a.rgb[c]) as f64)
+    let keep = (1.0 - a.alpha).max(0.0) as f64;
+    [0, 1, 2].map(|c| base[c] as f64 * keep + l * a.rgb[c] as f64)
 }
 
 /// Renders `frame` over `bd` with sensor noise from `noise_seed` (`None`: noise-free).
-pub fn render(frame: &Frame, bd: &Backdrop, noise_seed: Option<u64>) -> RgbImage {
+/// `base` is [`Backdrop::base_plate`] (computed once per folder).
+pub fn render(frame: &Frame, bd: &Backdrop, base: &[f32], noise_seed: Option<u64>) -> RgbImage {
     let (w, h) = (bd.width as usize, bd.height as usize);
+    assert_eq!(
+        base.len(),
+        w * h * 3,
+        "base plate does not match the backdrop size"
+    );
     let mut buf = vec![0u8; w * h * 3];
     buf.par_chunks_mut(w * 3 * BAND_ROWS)
         .enumerate()
@@ -288,15 +374,18 @@ pub fn render(frame: &Frame, bd: &Backdrop, noise_seed: Option<u64>) -> RgbImage
                 ChaCha8Rng::seed_from_u64(s ^ (band as u64).wrapping_mul(0xA24B_AED4_963E_E407))
             });
             for yy in 0..rows {
+                let row_base = &base[(y0 + yy) * w * 3..(y0 + yy + 1) * w * 3];
                 for x in 0..w {
-                    let v = compose(bd, x as u32, (y0 + yy) as u32, &acc[yy * w + x]);
+                    let b = &row_base[x * 3..x * 3 + 3];
+                    let v = compose(bd, b, x as u32, (y0 + yy) as u32, &acc[yy * w + x]);
                     for c in 0..3 {
                         let mut val = v[c];
                         if let Some(rng) = rng.as_mut() {
                             let z: f64 = StandardNormal.sample(rng);
                             val += (bd.noise_a * val.max(0.0) + bd.noise_b).sqrt() * z;
                         }
-                        out[(yy * w + x) * 3 + c] = val.round().clamp(0.0, 255.0) as u8;
+                        // Round half up; truncation of a non-negative value is its floor.
+                        out[(yy * w + x) * 3 + c] = (val.clamp(0.0, 255.0) + 0.5) as u8;
                     }
                 }
             }
@@ -308,7 +397,7 @@ pub fn render(frame: &Frame, bd: &Backdrop, noise_seed: Option<u64>) -> RgbImage
 pub fn expected_at(frame: &Frame, bd: &Backdrop, x: u32, y: u32) -> [f64; 3] {
     let mut acc = vec![Acc::default(); bd.width as usize];
     accumulate_band(frame, bd, y as usize, 1, &mut acc);
-    compose(bd, x, y, &acc[x as usize])
+    compose(bd, &bd.base_at(x, y), x, y, &acc[x as usize])
 }
 
 /// Rec. 601 luma of an RGB triple.
@@ -400,6 +489,30 @@ mod tests {
     }
 
     #[test]
+    fn base_plate_equals_pixelwise_base() {
+        let bd = Backdrop {
+            width: 200,
+            height: 30,
+            cloth_rgb: [0.05, 0.2, 0.08],
+            texture: 0.08,
+            texture_seed: 11,
+            lamp: 300.0,
+            gradient: [0.1, -0.05],
+            vignette: 0.2,
+            light: [-0.3, -0.4, 1.0],
+            noise_a: 0.5,
+            noise_b: 4.0,
+        };
+        let plate = bd.base_plate();
+        for y in 0..30 {
+            for x in 0..200 {
+                let i = (y * 200 + x) * 3;
+                assert_eq!(&plate[i..i + 3], &bd.base_at(x as u32, y as u32)[..]);
+            }
+        }
+    }
+
+    #[test]
     fn rendering_is_deterministic_and_noise_free_matches_expected() {
         let bd = Backdrop {
             width: 64,
@@ -430,17 +543,18 @@ mod tests {
                 specular: 0.5,
             }],
         };
-        let a = render(&frame, &bd, Some(7));
-        let b = render(&frame, &bd, Some(7));
+        let base = bd.base_plate();
+        let a = render(&frame, &bd, &base, Some(7));
+        let b = render(&frame, &bd, &base, Some(7));
         assert_eq!(a.as_raw(), b.as_raw());
-        let clean = render(&frame, &bd, None);
+        let clean = render(&frame, &bd, &base, None);
         let e = expected_at(&frame, &bd, 33, 20);
         let p = clean.get_pixel(33, 20).0;
         for c in 0..3 {
             assert!((p[c] as f64 - e[c]).abs() <= 0.5 + 1e-9);
         }
         // The streak adds light: 2R/L · frac = 12/64 · 0.2 of ball light on the centre line.
-        let plate = render(&Frame::default(), &bd, None);
+        let plate = render(&Frame::default(), &bd, &base, None);
         assert!(clean.get_pixel(33, 20).0[1] > plate.get_pixel(33, 20).0[1]);
     }
 }
