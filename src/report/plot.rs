@@ -135,10 +135,13 @@ pub struct Points {
     pub marker: Marker,
 }
 
-/// Filled rectangles `((x0, y0), (x1, y1), colour)` with their own legend entries.
+/// A filled rectangle `((x0, y0), (x1, y1), colour)`.
+pub type Cell = ((f64, f64), (f64, f64), RGBColor);
+
+/// Filled rectangles with their own legend entries.
 #[derive(Debug, Clone, Default)]
 pub struct Cells {
-    pub rects: Vec<((f64, f64), (f64, f64), RGBColor)>,
+    pub rects: Vec<Cell>,
     pub legend: Vec<(String, RGBColor)>,
 }
 
@@ -564,6 +567,14 @@ fn emptiest_corner(p: &Panel) -> LegendAt {
         for s in &p.points {
             for d in &s.points {
                 if inside(d.x, d.y) {
+                    score += 40.0;
+                }
+            }
+        }
+        for n in &p.notes {
+            // A note's text runs about a quarter of the width to the right of its anchor.
+            for k in 0..4 {
+                if inside(n.x + 0.06 * k as f64 * w, n.y) {
                     score += 40.0;
                 }
             }
