@@ -161,3 +161,100 @@ fn regime_boundary_jump_when_static_exceeds_dynamic_friction() {
         .unwrap();
     assert!((below[1].unwrap() - expect_below).abs() < 1e-8);
 }
+
+mod fits {
+    use streakfit::fit::synthetic::{SyntheticSpec, SyntheticSpin, synthetic_table};
+    use streakfit::fit::{FitOptions, fit_materials};
+    use streakfit::physics::Coefficients;
+    use streakfit::table::ShotRow;
+
+    fn table(n: usize, lo: f64, hi: f64, noise: f64, seed: u64) -> Vec<ShotRow> {
+        let spec = SyntheticSpec {
+            material: "billiard".into(),
+            coefficients: Coefficients::new(0.97, 0.07, 0.15),
+            n,
+            psi_lo_deg: lo,
+            psi_hi_deg: hi,
+            noise_deg: noise,
+            spin: SyntheticSpin::Rolling,
+            seed,
+        };
+        let mut rows = synthetic_table(&spec).0;
+        for r in &mut rows {
+            // Stated uncertainty 0.3° even where the data carry no noise.
+            for e in [
+                &mut r.psi_err_deg,
+                &mut r.delta1_err_deg,
+                &mut r.delta2_err_deg,
+                &mut r.theta1_err_deg,
+                &mut r.theta2_err_deg,
+            ] {
+                *e = Some(0.3);
+            }
+        }
+        rows
+    }
+
+    fn opts() -> FitOptions {
+        FitOptions {
+            bootstrap: 0,
+            ..FitOptions::default()
+        }
+    }
+
+    #[test]
+    fn noise_free_data_are_recovered_exactly() {
+        let out = fit_materials(&table(30, 10.0, 70.0, 0.0, 1), &opts()).unwrap();
+        let f = &out.fits[0];
+        assert_eq!(f.model, "mu-mu");
+        assert!((f.e.unwrap() - 0.97).abs() < 1e-6, "e {:?}", f.e);
+        assert!((f.mu.unwrap() - 0.07).abs() < 1e-6, "mu {:?}", f.mu);
+        assert!(f.chi2 < 1e-6);
+    }
+
+    #[test]
+    fn one_impact_angle_still_determines_e_and_mu_but_not_mu_table() {
+        // Four angles per shot against (e, mu, psi): identified; mu' cancels in gross slip.
+        let f = &fit_materials(&table(20, 40.0, 40.0, 0.3, 2), &opts())
+            .unwrap()
+            .fits[0];
+        assert!((f.e.unwrap() - 0.97).abs() < 3.0 * f.e_se.unwrap());
+        assert!((f.mu.unwrap() - 0.07).abs() < 3.0 * f.mu_se.unwrap());
+        assert_eq!((f.mu_table, f.mu_table_se), (None, None));
+        assert!(f.unidentified.contains_key("mu_table"));
+        assert!(!f.identified.contains(&"mu_table".to_string()));
+    }
+
+    #[test]
+    fn two_shots_are_refused_with_a_reason() {
+        let err = fit_materials(&table(2, 20.0, 60.0, 0.3, 3), &opts())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("2 usable shots, at least 3"), "{err}");
+    }
+
+    #[test]
+    fn identical_rows_fit_like_one_exact_shot() {
+        let rows = vec![table(1, 35.0, 35.0, 0.0, 4)[0].clone(); 10];
+        let f = &fit_materials(&rows, &opts()).unwrap().fits[0];
+        // Noise-free angles of one shot repeated: the theory reproduces them exactly.
+        assert!(
+            (f.e.unwrap() - 0.97).abs() < 1e-5 && (f.mu.unwrap() - 0.07).abs() < 1e-5,
+            "{f:?}"
+        );
+    }
+
+    #[test]
+    fn outliers_of_twenty_degrees_are_rejected() {
+        let mut rows = table(40, 10.0, 70.0, 0.3, 5);
+        for r in rows.iter_mut().step_by(10) {
+            r.theta1_deg = r.theta1_deg.map(|t| t + 20.0);
+        }
+        let f = &fit_materials(&rows, &opts()).unwrap().fits[0];
+        assert_eq!((f.n_used, f.n_rejected), (36, 4));
+        assert!(
+            (f.e.unwrap() - 0.97).abs() < 0.01 && (f.mu.unwrap() - 0.07).abs() < 0.01,
+            "{f:?}"
+        );
+    }
+}
