@@ -9,6 +9,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod cli;
+pub mod extract;
 pub mod fit;
 pub mod physics;
 pub mod pipeline;
@@ -17,3 +18,4 @@ pub mod report;
 pub mod scene;
 pub mod synth;
 pub mod table;
+pub mod vision;

@@ -20,6 +20,8 @@ struct Cli {
 enum Command {
     /// Theory: post-collision and post-transition angles for given coefficients.
     Predict(streakfit::predict::PredictArgs),
+    /// Measure impact, post-collision and post-transition angles in folders of photographs.
+    Extract(streakfit::extract::ExtractArgs),
     /// Synthetic long-exposure shot photographs with exact ground truth.
     Synth(streakfit::synth::SynthArgs),
     /// Run a pipeline (synth/extract/fit/report with caching), e.g. pipelines/demo.toml.
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
     };
     let result: CliResult = match &cli.command {
         Command::Predict(a) => streakfit::predict::run(a),
+        Command::Extract(a) => streakfit::extract::run(a),
         Command::Synth(a) => streakfit::synth::run(a),
         Command::Run(a) => streakfit::pipeline::run(a),
         Command::Fit(a) => streakfit::fit::run(a),

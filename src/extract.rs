@@ -1,0 +1,336 @@
+//! `streakfit extract DIR... --out FILE.parquet|FILE.csv [--overlays DIR] [--jobs N] [--shard K/N]`:
+//! the measuring instrument, run over folders of photographs.
+//!
+//! Every image file (`.png`, `.jpg`, `.jpeg`, `.tif`, `.tiff`, any case) in the folders gives
+//! exactly one row, in sorted order: `ok`, `declined` (no collision, one ball only, saturated,
+//! ambiguous) or `error` (empty, corrupt, unreadable, too small) with a reason; the batch always
+//! goes on (a panic in the analysis of one image becomes that image's `error` row). A plate named
+//! by `scene.toml` (`background`) is the cloth model for the images that name it, not a shot.
+//! `--shard K/N` (1 ≤ K ≤ N) keeps the images whose index `i` in the sorted list of all images
+//! satisfies `i mod N = K - 1`, so the shard tables of an array job concatenate into the full one.
+//! Images are analysed in parallel (rayon, `--jobs` threads); a progress bar is drawn only when
+//! stderr is a terminal. The table is written atomically; the exit code is 1 when any row is
+//! `error`.
+
+use crate::cli::{CliError, CliResult, Outcome};
+use crate::scene::{ImageScene, SceneConfig};
+use crate::table::{ShotRow, Status, TableFormat, write_angle_table};
+use crate::vision::{
+    AnalysisOptions, analyse,
+    image_io::{self, RgbImage},
+    overlay,
+};
+use anyhow::Context;
+use clap::Args;
+use rayon::prelude::*;
+use std::collections::{BTreeSet, HashMap};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+#[derive(Debug, Args, Clone)]
+pub struct ExtractArgs {
+    /// Folders of photographs (JPEG, PNG, TIFF), each optionally with a scene.toml.
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// Output table: FILE.parquet or FILE.csv.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write an overlay PNG per photo into this folder.
+    #[arg(long)]
+    pub overlays: Option<PathBuf>,
+    /// Number of worker threads (default: all cores).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Process only shard K of N (1-based): every N-th image starting with the K-th.
+    #[arg(long)]
+    pub shard: Option<String>,
+}
+
+/// One image to analyse.
+#[derive(Debug, Clone)]
+pub struct Job {
+    pub path: PathBuf,
+    pub file: String,
+    pub scene: ImageScene,
+    pub plate: Option<PathBuf>,
+}
+
+fn is_image(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| {
+            matches!(
+                e.to_ascii_lowercase().as_str(),
+                "png" | "jpg" | "jpeg" | "tif" | "tiff"
+            )
+        })
+        .unwrap_or(false)
+}
+
+/// Parses `K/N` (1 ≤ K ≤ N).
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (k, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("--shard: '{s}' is not K/N"))?;
+    let k: usize = k
+        .trim()
+        .parse()
+        .map_err(|_| format!("--shard: '{k}' is not a whole number"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("--shard: '{n}' is not a whole number"))?;
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("--shard: {k}/{n} needs 1 ≤ K ≤ N"));
+    }
+    Ok((k, n))
+}
+
+/// Lists the images of the folders (sorted per folder, folders in the given order), excluding
+/// plates named by `scene.toml`.
+pub fn list_jobs(dirs: &[PathBuf]) -> Result<Vec<Job>, CliError> {
+    let mut jobs = Vec::new();
+    for dir in dirs {
+        if dir.is_file() {
+            let parent = dir.parent().unwrap_or(Path::new("."));
+            let scene = SceneConfig::load(parent).map_err(CliError::usage)?;
+            let file = dir
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            let sc = scene.for_image(&file);
+            let plate = sc.background.as_ref().map(|b| parent.join(b));
+            jobs.push(Job {
+                path: dir.clone(),
+                file,
+                scene: sc,
+                plate,
+            });
+            continue;
+        }
+        if !dir.is_dir() {
+            return Err(CliError::usage(format!(
+                "input '{}' is neither a folder nor a file",
+                dir.display()
+            )));
+        }
+        let scene = SceneConfig::load(dir).map_err(CliError::usage)?;
+        let mut plates: BTreeSet<String> = BTreeSet::new();
+        plates.extend(scene.defaults.background.clone());
+        for s in scene.images.values() {
+            plates.extend(s.background.clone());
+        }
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+            .map_err(|e| CliError::usage(format!("cannot read folder '{}': {e}", dir.display())))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && is_image(p))
+            .collect();
+        files.sort();
+        for path in files {
+            let file = path
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            if plates.contains(&file) {
+                continue;
+            }
+            let sc = scene.for_image(&file);
+            let plate = sc.background.as_ref().map(|b| dir.join(b));
+            jobs.push(Job {
+                path,
+                file,
+                scene: sc,
+                plate,
+            });
+        }
+    }
+    Ok(jobs)
+}
+
+/// Analyses one image into its row (and its overlay, when asked).
+pub fn process(
+    job: &Job,
+    plate: Option<&Result<Arc<RgbImage>, String>>,
+    overlays: Option<&Path>,
+    opts: &AnalysisOptions,
+) -> ShotRow {
+    let t0 = Instant::now();
+    let material = job
+        .scene
+        .material
+        .clone()
+        .unwrap_or_else(|| "unknown".into());
+    let mut row = match image_io::load(&job.path) {
+        Err(e) => ShotRow::failed(&job.file, Status::Error, e, &material),
+        Ok(img) => {
+            let plate_img = match plate {
+                Some(Err(e)) => {
+                    let mut r = ShotRow::failed(&job.file, Status::Error, e.clone(), &material);
+                    r.seconds = t0.elapsed().as_secs_f64();
+                    return r;
+                }
+                Some(Ok(p)) => Some(p.as_ref()),
+                None => None,
+            };
+            let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                analyse(&img, plate_img, opts)
+            }));
+            match res {
+                Err(_) => ShotRow::failed(
+                    &job.file,
+                    Status::Error,
+                    "internal error while analysing this image",
+                    &material,
+                ),
+                Ok(a) => {
+                    let mut row = ShotRow::failed(&job.file, a.status, a.reason.clone(), &material);
+                    row.psi_deg = a.psi_deg;
+                    row.delta1_deg = a.delta1_deg;
+                    row.delta2_deg = a.delta2_deg;
+                    row.theta1_deg = a.theta1_deg;
+                    row.theta2_deg = a.theta2_deg;
+                    row.psi_err_deg = a.psi_err_deg;
+                    row.delta1_err_deg = a.delta1_err_deg;
+                    row.delta2_err_deg = a.delta2_err_deg;
+                    row.theta1_err_deg = a.theta1_err_deg;
+                    row.theta2_err_deg = a.theta2_err_deg;
+                    row.path_model1 = a.path_model1.clone();
+                    row.path_model2 = a.path_model2.clone();
+                    row.ball_radius_px = a.ball_radius_px;
+                    row.impact_x_px = a.impact.map(|p| p.0);
+                    row.impact_y_px = a.impact.map(|p| p.1);
+                    if let Some(dir) = overlays
+                        && let Err(e) = write_overlay(dir, &job.file, &img, &a)
+                    {
+                        if row.status == Status::Ok {
+                            row.status = Status::Error;
+                        }
+                        row.reason = format!("{}; overlay not written: {e:#}", row.reason);
+                    }
+                    row
+                }
+            }
+        }
+    };
+    row.spin = job.scene.spin;
+    row.english = job.scene.english;
+    row.seconds = t0.elapsed().as_secs_f64();
+    row
+}
+
+/// Overlay file name for an image.
+pub fn overlay_name(file: &str) -> String {
+    let stem = Path::new(file)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| file.to_string());
+    format!("{stem}_overlay.png")
+}
+
+fn write_overlay(
+    dir: &Path,
+    file: &str,
+    img: &RgbImage,
+    a: &crate::vision::Analysis,
+) -> anyhow::Result<()> {
+    let pic = overlay::render(img, a, file);
+    let path = dir.join(overlay_name(file));
+    let tmp = dir.join(format!(".{}.tmp{}", overlay_name(file), std::process::id()));
+    pic.save_with_format(&tmp, image::ImageFormat::Png)
+        .with_context(|| format!("cannot write '{}'", tmp.display()))?;
+    std::fs::rename(&tmp, &path).with_context(|| format!("cannot rename to '{}'", path.display()))
+}
+
+pub fn run(args: &ExtractArgs) -> CliResult {
+    TableFormat::from_path(&args.out).map_err(|e| CliError::usage(format!("--out: {e}")))?;
+    let shard = args
+        .shard
+        .as_deref()
+        .map(parse_shard)
+        .transpose()
+        .map_err(CliError::usage)?;
+    if args.jobs == Some(0) {
+        return Err(CliError::usage("--jobs: must be at least 1"));
+    }
+    let mut jobs = list_jobs(&args.dirs)?;
+    if let Some((k, n)) = shard {
+        jobs = jobs
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| i % n == k - 1)
+            .map(|(_, j)| j)
+            .collect();
+    }
+    if let Some(dir) = &args.overlays {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            CliError::usage(format!(
+                "--overlays: cannot create '{}': {e}",
+                dir.display()
+            ))
+        })?;
+    }
+    // Plates are decoded once each and shared.
+    let mut plates: HashMap<PathBuf, Result<Arc<RgbImage>, String>> = HashMap::new();
+    for j in &jobs {
+        if let Some(p) = &j.plate
+            && !plates.contains_key(p)
+        {
+            let v = image_io::load(p)
+                .map(Arc::new)
+                .map_err(|e| format!("background plate '{}': {e}", p.display()));
+            plates.insert(p.clone(), v);
+        }
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.jobs.unwrap_or(0))
+        .build()
+        .map_err(|e| CliError::Failed(anyhow::anyhow!("cannot start worker threads: {e}")))?;
+    let bar = if std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new(jobs.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} images  {elapsed_precise} (eta {eta})",
+            )
+            .expect("valid progress template"),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let opts = AnalysisOptions::default();
+    let rows: Vec<ShotRow> = pool.install(|| {
+        jobs.par_iter()
+            .map(|j| {
+                let row = process(
+                    j,
+                    j.plate.as_ref().and_then(|p| plates.get(p)),
+                    args.overlays.as_deref(),
+                    &opts,
+                );
+                bar.inc(1);
+                row
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    write_angle_table(&args.out, &rows).map_err(CliError::Failed)?;
+    let n_ok = rows.iter().filter(|r| r.status == Status::Ok).count();
+    let n_err = rows.iter().filter(|r| r.status == Status::Error).count();
+    eprintln!(
+        "extract: {} images: {} ok, {} declined, {} error → {}",
+        rows.len(),
+        n_ok,
+        rows.len() - n_ok - n_err,
+        n_err,
+        args.out.display()
+    );
+    Ok(if n_err > 0 {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}

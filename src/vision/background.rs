@@ -1,0 +1,357 @@
+//! Cloth model and the ball signal.
+//!
+//! Without a plate, the cloth `B(x, y)` of each channel is a polynomial surface of total degree 4
+//! in normalised image coordinates (illumination gradient and vignetting are smooth), fitted by
+//! least squares to block medians of a downsampled image, with iterative rejection of blocks that
+//! lie above the surface (balls only ever add light of their own colour, so the clipping is
+//! one-sided: `r > 2 σ` out, `r < -4 σ` out, `σ = 1.4826 MAD`). With a plate of the empty table,
+//! `B` is the plate itself, which also cancels the fixed cloth texture.
+//!
+//! Balls differ from the cloth along one colour direction per ball; the signal is the projection
+//! `S = u·(I - B)` on the mean ball-minus-cloth direction `u` of all clearly non-cloth pixels,
+//! which keeps `S` linear in the dwell fraction `w` (a norm would not be).
+
+use super::image_io::RgbImage;
+use nalgebra::{DMatrix, DVector};
+
+/// Downsampled target size (longest side) for the coarse search.
+const COARSE_SIDE: usize = 600;
+
+#[derive(Debug, Clone)]
+pub struct Signal {
+    pub w: usize,
+    pub h: usize,
+    /// Full-resolution projected signal `u·I` (or `u·(I - plate)`); local baselines are
+    /// subtracted where it is used, so the cloth surface need not be evaluated at full resolution.
+    pub full: Vec<f32>,
+    /// Downsampling factor of the coarse grid.
+    pub f: usize,
+    pub cw: usize,
+    pub ch: usize,
+    /// Coarse background-subtracted signal `u·(C - B)`.
+    pub coarse: Vec<f32>,
+    /// Robust (MAD) noise of `coarse`.
+    pub sigma_coarse: f32,
+    /// Unit ball-minus-cloth colour direction.
+    pub u: [f32; 3],
+    /// Median full-resolution cloth signal level `u·B` (for overlays and sanity checks).
+    pub cloth_level: f32,
+}
+
+impl Signal {
+    /// Bilinear sample of the full-resolution signal; `None` outside the image.
+    #[inline]
+    pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
+        if !(x >= 0.0 && y >= 0.0) {
+            return None;
+        }
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        if x0 + 1 >= self.w || y0 + 1 >= self.h {
+            return None;
+        }
+        let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+        let i = y0 * self.w + x0;
+        let a = self.full[i] + fx * (self.full[i + 1] - self.full[i]);
+        let b = self.full[i + self.w] + fx * (self.full[i + self.w + 1] - self.full[i + self.w]);
+        Some(a + fy * (b - a))
+    }
+
+    #[inline]
+    pub fn coarse_at(&self, x: usize, y: usize) -> f32 {
+        self.coarse[y * self.cw + x]
+    }
+}
+
+/// Fraction of pixels with any channel at full scale.
+pub fn saturated_fraction(img: &RgbImage) -> f64 {
+    let n = img.w * img.h;
+    let sat = img
+        .data
+        .chunks_exact(3)
+        .filter(|p| p.iter().any(|&v| v >= 0.998))
+        .count();
+    sat as f64 / n as f64
+}
+
+fn block_mean(img: &RgbImage, f: usize) -> (usize, usize, Vec<[f32; 3]>) {
+    let (cw, ch) = (img.w / f, img.h / f);
+    let mut out = vec![[0f32; 3]; cw * ch];
+    let norm = 1.0 / (f * f) as f32;
+    for cy in 0..ch {
+        for y in cy * f..cy * f + f {
+            let row = &img.data[3 * y * img.w..3 * (y + 1) * img.w];
+            for cx in 0..cw {
+                let o = &mut out[cy * cw + cx];
+                for x in cx * f..cx * f + f {
+                    o[0] += row[3 * x];
+                    o[1] += row[3 * x + 1];
+                    o[2] += row[3 * x + 2];
+                }
+            }
+        }
+    }
+    for o in &mut out {
+        for v in o.iter_mut() {
+            *v *= norm;
+        }
+    }
+    (cw, ch, out)
+}
+
+pub fn median(v: &mut [f32]) -> f32 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let k = v.len() / 2;
+    let (_, m, _) = v.select_nth_unstable_by(k, |a, b| a.total_cmp(b));
+    *m
+}
+
+/// Robust sigma: 1.4826 × median absolute deviation from the median.
+pub fn mad_sigma(v: &[f32]) -> f32 {
+    let mut a = v.to_vec();
+    let m = median(&mut a);
+    for x in &mut a {
+        *x = (*x - m).abs();
+    }
+    1.4826 * median(&mut a)
+}
+
+const POLY_DEGREE: usize = 4;
+
+fn poly_terms(x: f64, y: f64, out: &mut Vec<f64>) {
+    out.clear();
+    for total in 0..=POLY_DEGREE {
+        for i in 0..=total {
+            out.push(x.powi(i as i32) * y.powi((total - i) as i32));
+        }
+    }
+}
+
+/// Fits the cloth surface per channel to block medians of the coarse image and returns it on
+/// the coarse grid.
+fn fit_cloth_surface(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    let g = (cw.max(ch) / 75).max(2);
+    let (gw, gh) = (cw / g, ch / g);
+    let mut pts: Vec<(f64, f64, [f32; 3])> = Vec::with_capacity(gw * gh);
+    let mut buf: [Vec<f32>; 3] = [Vec::new(), Vec::new(), Vec::new()];
+    for gy in 0..gh {
+        for gx in 0..gw {
+            for b in &mut buf {
+                b.clear();
+            }
+            for y in gy * g..gy * g + g {
+                for x in gx * g..gx * g + g {
+                    let p = coarse[y * cw + x];
+                    for c in 0..3 {
+                        buf[c].push(p[c]);
+                    }
+                }
+            }
+            let m = [
+                median(&mut buf[0]),
+                median(&mut buf[1]),
+                median(&mut buf[2]),
+            ];
+            let xn = 2.0 * ((gx * g) as f64 + g as f64 / 2.0) / cw as f64 - 1.0;
+            let yn = 2.0 * ((gy * g) as f64 + g as f64 / 2.0) / ch as f64 - 1.0;
+            pts.push((xn, yn, m));
+        }
+    }
+    let mut terms = Vec::new();
+    poly_terms(0.0, 0.0, &mut terms);
+    let k = terms.len();
+    let mut inlier = vec![true; pts.len()];
+    let mut coef = [DVector::zeros(k), DVector::zeros(k), DVector::zeros(k)];
+    for _iter in 0..6 {
+        let n_in = inlier.iter().filter(|&&b| b).count();
+        if n_in < 2 * k {
+            break;
+        }
+        let mut a = DMatrix::<f64>::zeros(n_in, k);
+        let mut rhs = [
+            DVector::<f64>::zeros(n_in),
+            DVector::<f64>::zeros(n_in),
+            DVector::<f64>::zeros(n_in),
+        ];
+        let mut row = 0;
+        for (p, _) in pts.iter().zip(&inlier).filter(|(_, b)| **b) {
+            poly_terms(p.0, p.1, &mut terms);
+            for (j, t) in terms.iter().enumerate() {
+                a[(row, j)] = *t;
+            }
+            for c in 0..3 {
+                rhs[c][row] = p.2[c] as f64;
+            }
+            row += 1;
+        }
+        let svd = a.svd(true, true);
+        for c in 0..3 {
+            if let Ok(x) = svd.solve(&rhs[c], 1e-10) {
+                coef[c] = x;
+            }
+        }
+        // One-sided clipping on the summed residual: balls add light, texture is symmetric.
+        let res: Vec<f32> = pts
+            .iter()
+            .map(|p| {
+                poly_terms(p.0, p.1, &mut terms);
+                (0..3)
+                    .map(|c| {
+                        p.2[c] as f64
+                            - terms
+                                .iter()
+                                .zip(coef[c].iter())
+                                .map(|(t, a)| t * a)
+                                .sum::<f64>()
+                    })
+                    .sum::<f64>() as f32
+            })
+            .collect();
+        let inl_res: Vec<f32> = res
+            .iter()
+            .zip(&inlier)
+            .filter(|(_, b)| **b)
+            .map(|(r, _)| *r)
+            .collect();
+        let s = mad_sigma(&inl_res).max(1e-6);
+        let new: Vec<bool> = res.iter().map(|&r| r < 2.0 * s && r > -4.0 * s).collect();
+        if new == inlier {
+            break;
+        }
+        inlier = new;
+    }
+    let mut out = vec![[0f32; 3]; cw * ch];
+    for y in 0..ch {
+        let yn = 2.0 * (y as f64 + 0.5) / ch as f64 - 1.0;
+        for x in 0..cw {
+            let xn = 2.0 * (x as f64 + 0.5) / cw as f64 - 1.0;
+            poly_terms(xn, yn, &mut terms);
+            for c in 0..3 {
+                out[y * cw + x][c] = terms
+                    .iter()
+                    .zip(coef[c].iter())
+                    .map(|(t, a)| t * a)
+                    .sum::<f64>() as f32;
+            }
+        }
+    }
+    out
+}
+
+/// Builds the ball signal of a photo; `plate` is the empty-table background when known.
+pub fn build(img: &RgbImage, plate: Option<&RgbImage>) -> Result<Signal, String> {
+    if let Some(p) = plate
+        && (p.w != img.w || p.h != img.h)
+    {
+        return Err(format!(
+            "background plate is {}×{} px but the photo is {}×{} px",
+            p.w, p.h, img.w, img.h
+        ));
+    }
+    let f = img.w.max(img.h).div_ceil(COARSE_SIDE).max(1);
+    let (cw, ch, c_img) = block_mean(img, f);
+    let bg = match plate {
+        Some(p) => block_mean(p, f).2,
+        None => fit_cloth_surface(cw, ch, &c_img),
+    };
+    let diff: Vec<[f32; 3]> = c_img
+        .iter()
+        .zip(&bg)
+        .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+        .collect();
+    let sig_c: Vec<f32> = (0..3)
+        .map(|c| mad_sigma(&diff.iter().map(|d| d[c]).collect::<Vec<_>>()).max(1e-5))
+        .collect();
+    // Colour direction of the balls: mean difference of clearly non-cloth pixels.
+    let mut acc = [0f64; 3];
+    let mut n_sig = 0usize;
+    for d in &diff {
+        let z2: f32 = (0..3).map(|c| (d[c] / sig_c[c]).powi(2)).sum();
+        if z2 > 36.0 {
+            for c in 0..3 {
+                acc[c] += d[c] as f64;
+            }
+            n_sig += 1;
+        }
+    }
+    let norm = (acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2]).sqrt();
+    if n_sig < 4 || norm <= 0.0 {
+        return Err("blank image: nothing differs from the cloth".into());
+    }
+    let u = [
+        (acc[0] / norm) as f32,
+        (acc[1] / norm) as f32,
+        (acc[2] / norm) as f32,
+    ];
+    let coarse: Vec<f32> = diff
+        .iter()
+        .map(|d| u[0] * d[0] + u[1] * d[1] + u[2] * d[2])
+        .collect();
+    let sigma_coarse = mad_sigma(&coarse).max(1e-6);
+    let mut full: Vec<f32> = img
+        .data
+        .chunks_exact(3)
+        .map(|p| u[0] * p[0] + u[1] * p[1] + u[2] * p[2])
+        .collect();
+    if let Some(p) = plate {
+        for (v, q) in full.iter_mut().zip(p.data.chunks_exact(3)) {
+            *v -= u[0] * q[0] + u[1] * q[1] + u[2] * q[2];
+        }
+    }
+    let mut bl: Vec<f32> = bg
+        .iter()
+        .map(|b| u[0] * b[0] + u[1] * b[1] + u[2] * b[2])
+        .collect();
+    let cloth_level = if plate.is_some() {
+        0.0
+    } else {
+        median(&mut bl)
+    };
+    Ok(Signal {
+        w: img.w,
+        h: img.h,
+        full,
+        f,
+        cw,
+        ch,
+        coarse,
+        sigma_coarse,
+        u,
+        cloth_level,
+    })
+}
+
+/// Separable box blur of radius `r` (window `2r + 1`, edges clamped) on a `w × h` grid.
+pub fn box_blur(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
+    if r == 0 {
+        return src.to_vec();
+    }
+    let mut tmp = vec![0f32; w * h];
+    let mut out = vec![0f32; w * h];
+    let norm = 1.0 / (2 * r + 1) as f32;
+    for y in 0..h {
+        let row = &src[y * w..(y + 1) * w];
+        let mut s: f32 = (0..=2 * r)
+            .map(|k| row[k.saturating_sub(r).min(w - 1)])
+            .sum();
+        for x in 0..w {
+            tmp[y * w + x] = s * norm;
+            let add = (x + r + 1).min(w - 1);
+            let sub = x.saturating_sub(r);
+            s += row[add] - row[sub];
+        }
+    }
+    for x in 0..w {
+        let mut s: f32 = (0..=2 * r)
+            .map(|k| tmp[k.saturating_sub(r).min(h - 1) * w + x])
+            .sum();
+        for y in 0..h {
+            out[y * w + x] = s * norm;
+            let add = (y + r + 1).min(h - 1);
+            let sub = y.saturating_sub(r);
+            s += tmp[add * w + x] - tmp[sub * w + x];
+        }
+    }
+    out
+}

@@ -1,0 +1,261 @@
+//! The object ball's waiting disc: centre `O` and radius `R`.
+//!
+//! Coarse: the brightest blob of the smoothed coarse signal, cut at half its plateau level.
+//! Fine: along `N` rays from the coarse centre the full-resolution profile is sampled every
+//! 0.5 px; the edge is the position of steepest descent (sub-pixel by a parabola through the
+//! smoothed derivative), which is the silhouette radius for a sharp disc whatever its shading.
+//! A circle is fitted to the edge points (algebraic fit, then rejection of points more than
+//! 3.5 σ off and refit), giving `O`, `R` and their standard errors `σ_O = σ_r sqrt(2/n)`,
+//! `σ_R = σ_r / sqrt(n)` from the radial scatter `σ_r`.
+
+use super::background::{Signal, box_blur, median};
+use nalgebra::{Matrix3, Vector3};
+
+#[derive(Debug, Clone)]
+pub struct CoarseDisc {
+    /// Full-resolution centre and radius estimates.
+    pub cx: f64,
+    pub cy: f64,
+    pub r: f64,
+    /// Plateau level of the coarse signal inside the disc.
+    pub level: f32,
+    /// Ratio of the principal second moments (1 for a disc, ~4 for two touching discs).
+    pub elongation: f64,
+}
+
+#[derive(Debug, Clone)]
+pub struct Disc {
+    pub cx: f64,
+    pub cy: f64,
+    pub r: f64,
+    pub sigma_c: f64,
+    pub sigma_r: f64,
+    /// Signal level inside the disc minus outside (full resolution).
+    pub contrast: f64,
+    pub edge_points: Vec<(f64, f64)>,
+}
+
+/// Flood fill of `mask` (coarse grid) from `seed`; returns the pixel indices.
+fn flood(w: usize, h: usize, seed: usize, inside: impl Fn(usize) -> bool) -> Vec<usize> {
+    let mut seen = vec![false; w * h];
+    let mut stack = vec![seed];
+    let mut out = Vec::new();
+    seen[seed] = true;
+    while let Some(i) = stack.pop() {
+        out.push(i);
+        let (x, y) = (i % w, i / w);
+        let mut push = |j: usize| {
+            if !seen[j] && inside(j) {
+                seen[j] = true;
+                stack.push(j);
+            }
+        };
+        if x > 0 {
+            push(i - 1);
+        }
+        if x + 1 < w {
+            push(i + 1);
+        }
+        if y > 0 {
+            push(i - w);
+        }
+        if y + 1 < h {
+            push(i + w);
+        }
+    }
+    out
+}
+
+/// Brightest compact blob on the coarse grid.
+pub fn find_coarse(sig: &Signal) -> Result<CoarseDisc, String> {
+    let (w, h) = (sig.cw, sig.ch);
+    let s = box_blur(&sig.coarse, w, h, 1);
+    let (imax, &m) = s
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .ok_or("empty image")?;
+    if m < 10.0 * sig.sigma_coarse {
+        return Err(format!(
+            "no ball disc found (brightest spot is {:.1} σ above the cloth)",
+            m / sig.sigma_coarse
+        ));
+    }
+    let r0 = flood(w, h, imax, |j| s[j] > 0.3 * m);
+    let mut vals: Vec<f32> = r0.iter().map(|&j| s[j]).collect();
+    let plateau = median(&mut vals);
+    let region = flood(w, h, imax, |j| s[j] > 0.5 * plateau);
+    let n = region.len() as f64;
+    if n < 3.0 {
+        return Err("no ball disc found (bright spot smaller than a few pixels)".into());
+    }
+    let (mut sx, mut sy) = (0.0, 0.0);
+    for &j in &region {
+        sx += (j % w) as f64;
+        sy += (j / w) as f64;
+    }
+    let (mx, my) = (sx / n, sy / n);
+    let (mut cxx, mut cyy, mut cxy) = (0.0, 0.0, 0.0);
+    for &j in &region {
+        let (dx, dy) = ((j % w) as f64 - mx, (j / w) as f64 - my);
+        cxx += dx * dx;
+        cyy += dy * dy;
+        cxy += dx * dy;
+    }
+    let (cxx, cyy, cxy) = (cxx / n, cyy / n, cxy / n);
+    let tr = cxx + cyy;
+    let det = cxx * cyy - cxy * cxy;
+    let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
+    let (l1, l2) = (tr / 2.0 + disc, (tr / 2.0 - disc).max(1e-9));
+    let f = sig.f as f64;
+    Ok(CoarseDisc {
+        cx: (mx + 0.5) * f,
+        cy: (my + 0.5) * f,
+        r: (n / std::f64::consts::PI).sqrt() * f,
+        level: plateau,
+        elongation: l1 / l2,
+    })
+}
+
+/// Algebraic (Kåsa) circle fit: minimises `Σ (x² + y² + D x + E y + F)²`.
+fn kasa(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
+    let mut a = Matrix3::<f64>::zeros();
+    let mut b = Vector3::<f64>::zeros();
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |s, p| (s.0 + p.0, s.1 + p.1));
+    let (mx, my) = (mx / points.len() as f64, my / points.len() as f64);
+    for &(x, y) in points {
+        let (x, y) = (x - mx, y - my);
+        let v = Vector3::new(x, y, 1.0);
+        a += v * v.transpose();
+        b += v * -(x * x + y * y);
+    }
+    let s = a.lu().solve(&b)?;
+    let (cx, cy) = (-s[0] / 2.0, -s[1] / 2.0);
+    let r2 = cx * cx + cy * cy - s[2];
+    (r2 > 0.0).then(|| (cx + mx, cy + my, r2.sqrt()))
+}
+
+/// Sub-pixel circle fit to the disc edge at full resolution.
+pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
+    let (mut cx, mut cy, mut r) = (c.cx, c.cy, c.r);
+    let mut result = None;
+    // Two passes: the second starts from the first fit, so rays are radial to the true centre.
+    for _pass in 0..2 {
+        let n_rays = ((2.0 * std::f64::consts::PI * r / 1.5) as usize).clamp(64, 720);
+        let step = 0.5;
+        let (r_in, r_out) = (0.55 * r, 1.45 * r);
+        let n_s = ((r_out - r_in) / step) as usize + 1;
+        let mut edges = Vec::with_capacity(n_rays);
+        let mut drops = Vec::with_capacity(n_rays);
+        let mut prof = vec![0f32; n_s];
+        for k in 0..n_rays {
+            let a = 2.0 * std::f64::consts::PI * k as f64 / n_rays as f64;
+            let (ca, sa) = (a.cos(), a.sin());
+            let mut ok = true;
+            for (i, p) in prof.iter_mut().enumerate() {
+                let rr = r_in + step * i as f64;
+                match sig.sample(cx + rr * ca, cy + rr * sa) {
+                    Some(v) => *p = v,
+                    None => {
+                        ok = false;
+                        break;
+                    }
+                }
+            }
+            if !ok {
+                continue;
+            }
+            // Derivative of the [1 2 1]-smoothed profile, central difference over 1 px.
+            let sm: Vec<f32> = (0..n_s)
+                .map(|i| {
+                    let a = prof[i.saturating_sub(1)];
+                    let b = prof[(i + 1).min(n_s - 1)];
+                    0.25 * a + 0.5 * prof[i] + 0.25 * b
+                })
+                .collect();
+            let lo = ((0.75 * r - r_in) / step) as usize;
+            let hi = (((1.25 * r - r_in) / step) as usize).min(n_s - 3);
+            let mut best = (0usize, f32::INFINITY);
+            for i in lo.max(2)..hi {
+                let g = sm[i + 1] - sm[i - 1];
+                if g < best.1 {
+                    best = (i, g);
+                }
+            }
+            let i = best.0;
+            if i < 3 || i + 3 >= n_s {
+                continue;
+            }
+            let g = |j: usize| (sm[j + 1] - sm[j - 1]) as f64;
+            let (gm, g0, gp) = (g(i - 1), g(i), g(i + 1));
+            let den = gm - 2.0 * g0 + gp;
+            let off = if den.abs() > 1e-12 {
+                (0.5 * (gm - gp) / den).clamp(-1.0, 1.0)
+            } else {
+                0.0
+            };
+            let re = r_in + step * (i as f64 + off);
+            let inside: f32 = prof[..n_s / 5].iter().sum::<f32>() / (n_s / 5) as f32;
+            let outside: f32 = prof[n_s - n_s / 6..].iter().sum::<f32>() / (n_s / 6) as f32;
+            edges.push((cx + re * ca, cy + re * sa));
+            drops.push(inside - outside);
+        }
+        if edges.len() < 16 {
+            return Err("ball disc too close to the image border to measure".into());
+        }
+        let mut d2 = drops.clone();
+        let md = median(&mut d2);
+        if md <= 0.0 {
+            return Err("no ball disc found (no edge)".into());
+        }
+        // Rays whose edge contrast is far below the typical one cross a streak or the border.
+        let mut pts: Vec<(f64, f64)> = edges
+            .iter()
+            .zip(&drops)
+            .filter(|(_, d)| **d > 0.5 * md)
+            .map(|(p, _)| *p)
+            .collect();
+        let mut fit = kasa(&pts).ok_or("disc edge fit failed")?;
+        let mut sr = 0.0;
+        for _ in 0..3 {
+            let res: Vec<f64> = pts
+                .iter()
+                .map(|p| ((p.0 - fit.0).hypot(p.1 - fit.1)) - fit.2)
+                .collect();
+            let mut a: Vec<f32> = res.iter().map(|x| x.abs() as f32).collect();
+            sr = (1.4826 * median(&mut a) as f64).max(0.02);
+            let keep: Vec<(f64, f64)> = pts
+                .iter()
+                .zip(&res)
+                .filter(|(_, r)| r.abs() < 3.5 * sr)
+                .map(|(p, _)| *p)
+                .collect();
+            if keep.len() < 16 {
+                break;
+            }
+            pts = keep;
+            fit = kasa(&pts).ok_or("disc edge fit failed")?;
+        }
+        let res: Vec<f64> = pts
+            .iter()
+            .map(|p| ((p.0 - fit.0).hypot(p.1 - fit.1)) - fit.2)
+            .collect();
+        let rms = (res.iter().map(|x| x * x).sum::<f64>() / res.len() as f64)
+            .sqrt()
+            .max(sr * 0.5);
+        let n = pts.len() as f64;
+        (cx, cy, r) = fit;
+        result = Some(Disc {
+            cx,
+            cy,
+            r,
+            sigma_c: rms * (2.0 / n).sqrt(),
+            sigma_r: rms / n.sqrt(),
+            contrast: md as f64,
+            edge_points: pts,
+        });
+    }
+    result.ok_or_else(|| "disc fit failed".into())
+}

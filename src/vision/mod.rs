@@ -1,0 +1,39 @@
+//! Vision: from one long-exposure photograph to the impact, post-collision and post-transition
+//! angles (`streakfit extract`).
+//!
+//! Photometry. A pixel records the exposure-weighted mix of ball and cloth,
+//! `I = (1 - w) B + w C_ball`, with `w` the fraction of the exposure a ball covered it. So the
+//! object ball's waiting position is a bright disc (`w` ≈ waiting time / exposure), and a ball
+//! moving at speed `v` paints a faint streak whose cross-profile at distance `d` from its
+//! centre-line is `w(d) ∝ 2 sqrt(R² - d²) / v` (chord dwell; ball shading makes it closer to
+//! `R² - d²`). Both are symmetric about the centre-line, which is what the sub-pixel estimate uses.
+//!
+//! Stages (one module each):
+//! - [`image_io`]: decode JPEG/PNG/TIFF (8/16 bit) to linear-in-file RGB `f32`;
+//! - [`background`]: cloth model (the `background` plate of `scene.toml`, or a robust polynomial
+//!   surface fitted to the photo itself), the ball-minus-cloth colour direction `u`, the projected
+//!   signal `S = u·(I - B)` and its MAD noise;
+//! - [`disc`]: the object ball's waiting disc, centre `O` and radius `R` from a circle fit to
+//!   sub-pixel edge points;
+//! - [`streak`]: coarse streak detection on a downsampled signal, then full-resolution tracking of
+//!   each streak's centre-line by symmetric centroids of baseline-subtracted cross-profiles;
+//! - [`pathfit`]: the joint physical model (incoming line, contact geometry, one path per outgoing
+//!   ball: line, or sliding parabola tangent to the rolling line), robust start, Levenberg–Marquardt,
+//!   model choice by BIC and covariance;
+//! - [`shot`]: scene reading (which streak is which ball) and the whole per-image analysis;
+//! - [`overlay`]: drawings that show why each number is what it is.
+//!
+//! Frame (see `shared/PHYSICS.md`): `x` points from the cue ball's centre at impact `P` to the
+//! object ball's centre `O`, with `P = O - 2R x̂` on the incoming centre-line; the scene is mirrored
+//! so that the incoming direction has `v_y ≥ 0`, hence `psi ∈ [0°, 90°)`. `delta` is the start
+//! tangent of a ball's path, `theta` the direction of its straight rolling part.
+
+pub mod background;
+pub mod disc;
+pub mod image_io;
+pub mod overlay;
+pub mod pathfit;
+pub mod shot;
+pub mod streak;
+
+pub use shot::{Analysis, AnalysisOptions, analyse};

@@ -1,0 +1,209 @@
+//! Overlays: the photo with what the extractor saw drawn on it.
+//!
+//! Yellow circle: the fitted object-ball disc (`O`, `R`); cyan circle: the cue ball at impact
+//! (`P`, `R`); dots: centre-line samples (white incoming, orange cue ball, magenta object ball,
+//! grey rejected); green curves: fitted paths (parabola then rolling line); red and green arrows:
+//! the frame axes `x` (line of centres) and `y` (after the mirror); text: status and angles with
+//! 1-sigma uncertainties. The photo is brightened (gamma) so faint streaks are visible.
+
+use super::image_io::RgbImage;
+use super::shot::{Analysis, Role};
+use ab_glyph::{FontRef, PxScale};
+use image::{Rgb, RgbImage as Rgb8};
+use imageproc::drawing::{
+    draw_filled_circle_mut, draw_hollow_circle_mut, draw_line_segment_mut, draw_text_mut,
+};
+
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+fn thick_line(img: &mut Rgb8, a: (f64, f64), b: (f64, f64), w: f64, c: Rgb<u8>) {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l = dx.hypot(dy).max(1e-9);
+    let n = (-dy / l, dx / l);
+    let k = (w / 2.0).ceil() as i32;
+    for i in -k..=k {
+        let o = i as f64 * 0.5;
+        draw_line_segment_mut(
+            img,
+            ((a.0 + o * n.0) as f32, (a.1 + o * n.1) as f32),
+            ((b.0 + o * n.0) as f32, (b.1 + o * n.1) as f32),
+            c,
+        );
+    }
+}
+
+fn arrow(img: &mut Rgb8, a: (f64, f64), b: (f64, f64), w: f64, c: Rgb<u8>) {
+    thick_line(img, a, b, w, c);
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l = dx.hypot(dy).max(1e-9);
+    let (ux, uy) = (dx / l, dy / l);
+    let h = (0.15 * l).max(4.0);
+    for s in [-1.0, 1.0] {
+        let p = (
+            b.0 - h * (ux * 0.87 - s * uy * 0.5),
+            b.1 - h * (uy * 0.87 + s * ux * 0.5),
+        );
+        thick_line(img, b, p, w, c);
+    }
+}
+
+fn fmt_angle(name: &str, v: Option<f64>, e: Option<f64>) -> String {
+    match (v, e) {
+        (Some(v), Some(e)) => format!("{name} = {v:.3}° ± {e:.3}°"),
+        (Some(v), None) => format!("{name} = {v:.3}°"),
+        _ => format!("{name}: undefined"),
+    }
+}
+
+/// Draws the overlay for one analysed photo.
+pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
+    let mut out = Rgb8::new(img.w as u32, img.h as u32);
+    for (i, p) in out.pixels_mut().enumerate() {
+        let q = img.px(i % img.w, i / img.w);
+        *p = Rgb(q.map(|v| (v.clamp(0.0, 1.0).powf(0.6) * 255.0).round() as u8));
+    }
+    let font = FontRef::try_from_slice(FONT).expect("embedded DejaVuSans is a valid font");
+    let side = img.w.min(img.h) as f64;
+    let lw = (side / 500.0).max(1.0);
+    let dot = (side / 400.0).max(1.0).round() as i32;
+    let r = a.ball_radius_px.unwrap_or(side / 40.0);
+    if let Some(d) = &a.disc {
+        draw_hollow_circle_mut(
+            &mut out,
+            (d.cx.round() as i32, d.cy.round() as i32),
+            d.r.round() as i32,
+            Rgb([255, 230, 0]),
+        );
+    }
+    for (role, samples) in &a.streaks {
+        let (color, inl) = match role {
+            Role::Incoming => (Rgb([255, 255, 255]), a.fit.as_ref().map(|f| &f.inliers[0])),
+            Role::CueOut => (Rgb([255, 150, 0]), a.fit.as_ref().map(|f| &f.inliers[1])),
+            Role::ObjectOut => (Rgb([255, 60, 255]), a.fit.as_ref().map(|f| &f.inliers[2])),
+            Role::Unused => (Rgb([150, 150, 150]), None),
+        };
+        for (i, s) in samples.iter().enumerate() {
+            let ok = inl.is_none_or(|v| v.get(i).copied().unwrap_or(true));
+            let c = if ok { color } else { Rgb([120, 120, 120]) };
+            draw_filled_circle_mut(&mut out, (s.x.round() as i32, s.y.round() as i32), dot, c);
+        }
+    }
+    if let Some(fit) = &a.fit {
+        let p = fit.impact();
+        let o = fit.o();
+        draw_hollow_circle_mut(
+            &mut out,
+            (p.0.round() as i32, p.1.round() as i32),
+            fit.r().round() as i32,
+            Rgb([0, 255, 255]),
+        );
+        let len = (img.w + img.h) as f64;
+        // Incoming line (dashed look: drawn up to P).
+        let u = (
+            (fit.alpha() + fit.psi_s()).cos(),
+            (fit.alpha() + fit.psi_s()).sin(),
+        );
+        thick_line(
+            &mut out,
+            (p.0 - len * u.0, p.1 - len * u.1),
+            p,
+            lw,
+            Rgb([0, 200, 255]),
+        );
+        for g in [fit.geom1(), Some(fit.geom2())].into_iter().flatten() {
+            let pts = g.polyline(len);
+            for w in pts.windows(2) {
+                thick_line(&mut out, w[0], w[1], lw, Rgb([0, 255, 0]));
+            }
+            // Start tangent, as long as 3 R.
+            arrow(
+                &mut out,
+                g.start,
+                (g.start.0 + 3.0 * r * g.u0.0, g.start.1 + 3.0 * r * g.u0.1),
+                lw,
+                Rgb([255, 255, 0]),
+            );
+        }
+        let x = (fit.alpha().cos(), fit.alpha().sin());
+        let y = (-a.mirror * x.1, a.mirror * x.0);
+        arrow(
+            &mut out,
+            p,
+            (p.0 + 4.0 * r * x.0, p.1 + 4.0 * r * x.1),
+            1.5 * lw,
+            Rgb([255, 40, 40]),
+        );
+        arrow(
+            &mut out,
+            p,
+            (p.0 + 4.0 * r * y.0, p.1 + 4.0 * r * y.1),
+            1.5 * lw,
+            Rgb([40, 255, 40]),
+        );
+        let fs = PxScale::from((side / 30.0) as f32);
+        draw_text_mut(
+            &mut out,
+            Rgb([255, 40, 40]),
+            (p.0 + 4.2 * r * x.0) as i32,
+            (p.1 + 4.2 * r * x.1) as i32,
+            fs,
+            &font,
+            "x",
+        );
+        draw_text_mut(
+            &mut out,
+            Rgb([40, 255, 40]),
+            (p.0 + 4.2 * r * y.0) as i32,
+            (p.1 + 4.2 * r * y.1) as i32,
+            fs,
+            &font,
+            "y",
+        );
+        let _ = o;
+    }
+    let fs = (side / 35.0) as f32;
+    let mut lines = vec![
+        title.to_string(),
+        format!("status: {} {}", a.status.as_str(), a.reason),
+    ];
+    if a.status == crate::table::Status::Ok {
+        lines.push(fmt_angle("psi", a.psi_deg, a.psi_err_deg));
+        lines.push(format!(
+            "{}   ({})",
+            fmt_angle("delta1", a.delta1_deg, a.delta1_err_deg),
+            a.path_model1.as_deref().unwrap_or("stopped")
+        ));
+        lines.push(fmt_angle("theta1", a.theta1_deg, a.theta1_err_deg));
+        lines.push(format!(
+            "{}   ({})",
+            fmt_angle("delta2", a.delta2_deg, a.delta2_err_deg),
+            a.path_model2.as_deref().unwrap_or("")
+        ));
+        lines.push(fmt_angle("theta2", a.theta2_deg, a.theta2_err_deg));
+        if let Some(rr) = a.ball_radius_px {
+            lines.push(format!("R = {rr:.2} px"));
+        }
+    }
+    for (i, l) in lines.iter().enumerate() {
+        let y = (fs * 0.3 + i as f32 * fs * 1.25) as i32;
+        draw_text_mut(
+            &mut out,
+            Rgb([0, 0, 0]),
+            (fs * 0.4) as i32 + 1,
+            y + 1,
+            PxScale::from(fs),
+            &font,
+            l,
+        );
+        draw_text_mut(
+            &mut out,
+            Rgb([255, 255, 255]),
+            (fs * 0.4) as i32,
+            y,
+            PxScale::from(fs),
+            &font,
+            l,
+        );
+    }
+    out
+}

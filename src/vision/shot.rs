@@ -1,0 +1,655 @@
+//! Scene reading and the whole analysis of one photograph.
+//!
+//! Which streak is which: every assignment of the (up to three) streaks to *incoming*, *cue ball
+//! out* and *object ball out* is tried. For each, the incoming centre-line (RANSAC, then least
+//! squares) gives the impact point `P` (first point of that line at `2R` from `O`), hence `x̂`.
+//! An assignment is physical when the incoming ball moves towards the object ball
+//! (`psi ∈ [0°, 90°)`), the object ball's streak leaves from `O` within 35° of `x̂` (`|delta2|` is
+//! a throw angle, a few degrees), and the cue ball leaves into the half-plane the mirror convention
+//! allows (`delta1 ∈ [-25°, 150°]`). Among physical assignments the one with the smallest
+//! `|theta2|` wins; if the runner-up is about as good, the photo is declined (cannot tell which
+//! ball is which). Two streaks only: the cue ball stopped at the impact if a stationary disc
+//! sits at `P` (then `delta1`, `theta1` are undefined), otherwise its streak is hidden and the
+//! photo is declined.
+
+use super::background::{self, Signal};
+use super::disc::{self, Disc};
+use super::image_io::RgbImage;
+use super::pathfit::{self, JointFit, Problem};
+use super::streak::{self, KeepOut, Sample};
+use crate::table::Status;
+use rand::{Rng, SeedableRng};
+
+/// Options of the per-image analysis.
+#[derive(Debug, Clone, Default)]
+pub struct AnalysisOptions {
+    /// Largest fraction of saturated pixels accepted.
+    pub max_saturated: Option<f64>,
+}
+
+/// Role of a streak in the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    Incoming,
+    CueOut,
+    ObjectOut,
+    Unused,
+}
+
+/// Everything measured on one photo (numbers for the table, geometry for the overlay).
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    pub status: Status,
+    pub reason: String,
+    pub psi_deg: Option<f64>,
+    pub delta1_deg: Option<f64>,
+    pub delta2_deg: Option<f64>,
+    pub theta1_deg: Option<f64>,
+    pub theta2_deg: Option<f64>,
+    pub psi_err_deg: Option<f64>,
+    pub delta1_err_deg: Option<f64>,
+    pub delta2_err_deg: Option<f64>,
+    pub theta1_err_deg: Option<f64>,
+    pub theta2_err_deg: Option<f64>,
+    pub path_model1: Option<String>,
+    pub path_model2: Option<String>,
+    pub ball_radius_px: Option<f64>,
+    pub impact: Option<(f64, f64)>,
+    pub disc: Option<Disc>,
+    pub streaks: Vec<(Role, Vec<Sample>)>,
+    pub fit: Option<JointFit>,
+    /// +1 or -1: the mirror applied so that psi ≥ 0.
+    pub mirror: f64,
+}
+
+impl Analysis {
+    fn declined(status: Status, reason: impl Into<String>) -> Self {
+        Self {
+            status,
+            reason: reason.into(),
+            psi_deg: None,
+            delta1_deg: None,
+            delta2_deg: None,
+            theta1_deg: None,
+            theta2_deg: None,
+            psi_err_deg: None,
+            delta1_err_deg: None,
+            delta2_err_deg: None,
+            theta1_err_deg: None,
+            theta2_err_deg: None,
+            path_model1: None,
+            path_model2: None,
+            ball_radius_px: None,
+            impact: None,
+            disc: None,
+            streaks: Vec::new(),
+            fit: None,
+            mirror: 1.0,
+        }
+    }
+}
+
+fn wrap(a: f64) -> f64 {
+    let mut a = a % std::f64::consts::TAU;
+    if a > std::f64::consts::PI {
+        a -= std::f64::consts::TAU;
+    } else if a <= -std::f64::consts::PI {
+        a += std::f64::consts::TAU;
+    }
+    a
+}
+
+/// A straight line through samples: point, unit direction (from the first towards the last
+/// sample), robust start by RANSAC on pairs, then orthogonal least squares on the inliers.
+#[derive(Debug, Clone, Copy)]
+pub struct Line {
+    pub p: (f64, f64),
+    pub d: (f64, f64),
+}
+
+pub fn fit_line(samples: &[Sample]) -> Option<Line> {
+    let n = samples.len();
+    if n < 2 {
+        return None;
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5eed);
+    let mut sig: Vec<f32> = samples.iter().map(|s| s.sigma as f32).collect();
+    let tol = (3.0 * background::median(&mut sig) as f64).max(0.75);
+    let mut best_inl: Vec<bool> = vec![true; n];
+    let mut best_count = 0;
+    for _ in 0..(if n > 3 { 150 } else { 0 }) {
+        let i = rng.gen_range(0..n);
+        let j = rng.gen_range(0..n);
+        let (a, b) = (samples[i], samples[j]);
+        let l = (b.x - a.x).hypot(b.y - a.y);
+        if l < 1e-6 {
+            continue;
+        }
+        let d = ((b.x - a.x) / l, (b.y - a.y) / l);
+        let inl: Vec<bool> = samples
+            .iter()
+            .map(|s| (d.0 * (s.y - a.y) - d.1 * (s.x - a.x)).abs() < tol)
+            .collect();
+        let c = inl.iter().filter(|k| **k).count();
+        if c > best_count {
+            best_count = c;
+            best_inl = inl;
+        }
+    }
+    let pts: Vec<&Sample> = samples
+        .iter()
+        .zip(&best_inl)
+        .filter(|(_, k)| **k)
+        .map(|(s, _)| s)
+        .collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let m = pts.len() as f64;
+    let (mx, my) = pts.iter().fold((0.0, 0.0), |a, s| (a.0 + s.x, a.1 + s.y));
+    let (mx, my) = (mx / m, my / m);
+    let (mut cxx, mut cyy, mut cxy) = (0.0, 0.0, 0.0);
+    for s in &pts {
+        cxx += (s.x - mx).powi(2);
+        cyy += (s.y - my).powi(2);
+        cxy += (s.x - mx) * (s.y - my);
+    }
+    let ang = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+    let mut d = (ang.cos(), ang.sin());
+    let (f, l) = (samples[0], samples[n - 1]);
+    if d.0 * (l.x - f.x) + d.1 * (l.y - f.y) < 0.0 {
+        d = (-d.0, -d.1);
+    }
+    Some(Line { p: (mx, my), d })
+}
+
+/// First point of the line `p + t u` (moving along `u`) at distance `2r` from `o`; when the line
+/// passes farther than `2r` (a grazing shot measured with noise) its closest approach, provided
+/// that is within `tol · 2r`.
+fn contact_point(
+    p: (f64, f64),
+    u: (f64, f64),
+    o: (f64, f64),
+    r: f64,
+    tol: f64,
+) -> Option<(f64, f64)> {
+    let (wx, wy) = (p.0 - o.0, p.1 - o.1);
+    let b = wx * u.0 + wy * u.1;
+    let c = wx * wx + wy * wy - 4.0 * r * r;
+    let disc = b * b - c;
+    let t = if disc >= 0.0 {
+        -b - disc.sqrt()
+    } else {
+        let miss = (c - b * b + 4.0 * r * r).max(0.0).sqrt();
+        if miss > tol * 2.0 * r {
+            return None;
+        }
+        -b
+    };
+    Some((p.0 + t * u.0, p.1 + t * u.1))
+}
+
+/// A candidate reading of the scene.
+#[derive(Debug, Clone)]
+struct Reading {
+    inc: usize,
+    b1: Option<usize>,
+    b2: usize,
+    cost: f64,
+    x0: Vec<f64>,
+}
+
+fn initial_path(
+    samples: &[Sample],
+    start: (f64, f64),
+    alpha: f64,
+    r: f64,
+) -> Option<(f64, f64, f64, f64)> {
+    let n = samples.len();
+    let far = fit_line(&samples[n / 3..])?;
+    let theta = wrap(far.d.1.atan2(far.d.0) - alpha);
+    // Start tangent from the chord to the first few samples.
+    let k = (n / 10).clamp(1, 8);
+    let (mx, my) = samples[..k].iter().fold((0.0, 0.0), |a, s| {
+        (a.0 + s.x / k as f64, a.1 + s.y / k as f64)
+    });
+    let delta = wrap((my - start.1).atan2(mx - start.0) - alpha);
+    // Control point: intersection of the start tangent with the rolling line.
+    let u0 = ((alpha + delta).cos(), (alpha + delta).sin());
+    let den = u0.0 * far.d.1 - u0.1 * far.d.0;
+    let mut l0 = r;
+    let mut l1 = r;
+    if den.abs() > 1e-3 {
+        let (qx, qy) = (far.p.0 - start.0, far.p.1 - start.1);
+        let t = (qx * far.d.1 - qy * far.d.0) / den;
+        if t > 0.2 * r && t < 20.0 * r {
+            l0 = t;
+            l1 = t;
+        }
+    }
+    Some((delta, theta, l0, l1))
+}
+
+fn read_scene(
+    streaks: &[Vec<Sample>],
+    o: (f64, f64),
+    r: f64,
+    cue_stopped: bool,
+) -> Result<Reading, String> {
+    let k = streaks.len();
+    let lines: Vec<Option<Line>> = streaks.iter().map(|s| fit_line(s)).collect();
+    let mut readings = Vec::new();
+    for inc in 0..k {
+        let Some(li) = lines[inc] else { continue };
+        // Sample order runs from the disc outward: motion is the reverse.
+        let u = (-li.d.0, -li.d.1);
+        let Some(p) = contact_point(li.p, u, o, r, 1.15) else {
+            continue;
+        };
+        let alpha = (o.1 - p.1).atan2(o.0 - p.0);
+        let psi_s = wrap(u.1.atan2(u.0) - alpha);
+        if psi_s.abs() >= 89.9f64.to_radians() {
+            continue;
+        }
+        let m = if psi_s < 0.0 { -1.0 } else { 1.0 };
+        for b2 in 0..k {
+            if b2 == inc {
+                continue;
+            }
+            let Some(l2) = lines[b2] else { continue };
+            let Some((d2, t2, l02, l12)) = initial_path(&streaks[b2], o, alpha, r) else {
+                continue;
+            };
+            // The object ball's rolling line passes close to its start O.
+            let miss2 = (l2.d.0 * (o.1 - l2.p.1) - l2.d.1 * (o.0 - l2.p.0)).abs();
+            if t2.abs() > 35f64.to_radians() || miss2 > 1.5 * r {
+                continue;
+            }
+            let b1s: Vec<Option<usize>> = if cue_stopped {
+                vec![None]
+            } else {
+                (0..k).filter(|&j| j != inc && j != b2).map(Some).collect()
+            };
+            for b1 in b1s {
+                let mut x0 = vec![o.0, o.1, r, alpha, psi_s];
+                let mut cost = t2.abs();
+                if let Some(b1) = b1 {
+                    let Some((d1, t1, l0, l1)) = initial_path(&streaks[b1], p, alpha, r) else {
+                        continue;
+                    };
+                    let d1m = m * t1;
+                    if !(-25f64.to_radians()..=150f64.to_radians()).contains(&d1m) {
+                        continue;
+                    }
+                    // The cue ball leaves at a larger angle from x than the object ball.
+                    if d1m < m * t2 {
+                        cost += 0.5;
+                    }
+                    x0.extend_from_slice(&[d1, t1, l0, l1]);
+                }
+                x0.extend_from_slice(&[d2, t2, l02, l12]);
+                readings.push(Reading {
+                    inc,
+                    b1,
+                    b2,
+                    cost,
+                    x0,
+                });
+            }
+        }
+    }
+    readings.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    let Some(best) = readings.first().cloned() else {
+        return Err(
+            "no physical reading of the streaks (no incoming path meeting the object ball with \
+             an object-ball path leaving along the line of centres)"
+                .into(),
+        );
+    };
+    if let Some(second) = readings.get(1)
+        && second.cost < best.cost + 3f64.to_radians()
+        && (second.b2 != best.b2 || second.inc != best.inc)
+    {
+        return Err(format!(
+            "cannot tell which ball is which (two readings differ by {:.1}° in theta2)",
+            (second.cost - best.cost).to_degrees()
+        ));
+    }
+    Ok(best)
+}
+
+/// Whether a stationary ball sat at `p`: mean signal over a disc of radius `R/2` at `p` is at
+/// least a third of the object disc's contrast.
+fn disc_at(sig: &Signal, p: (f64, f64), r: f64, contrast: f64, ring_level: f64) -> bool {
+    let mut acc = 0.0;
+    let mut n = 0.0;
+    let h = (0.5 * r) as i64;
+    for dy in -h..=h {
+        for dx in -h..=h {
+            if (dx * dx + dy * dy) as f64 <= (0.5 * r).powi(2)
+                && let Some(v) = sig.sample(p.0 + dx as f64, p.1 + dy as f64)
+            {
+                acc += v as f64;
+                n += 1.0;
+            }
+        }
+    }
+    n > 0.0 && acc / n - ring_level > contrast / 3.0
+}
+
+/// Analyses one photo. `plate` is the empty-table background, when known.
+pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions) -> Analysis {
+    let sat = background::saturated_fraction(img);
+    let max_sat = opts.max_saturated.unwrap_or(0.05);
+    if sat > max_sat {
+        return Analysis::declined(
+            Status::Declined,
+            format!("saturated: {:.1}% of pixels at full scale", 100.0 * sat),
+        );
+    }
+    let sig = match background::build(img, plate) {
+        Ok(s) => s,
+        Err(e) => return Analysis::declined(Status::Declined, e),
+    };
+    let cd = match disc::find_coarse(&sig) {
+        Ok(c) => c,
+        Err(e) => return Analysis::declined(Status::Declined, e),
+    };
+    if cd.elongation > 2.0 {
+        let mut a = Analysis::declined(
+            Status::Declined,
+            format!(
+                "two touching discs (elongation {:.1}): a ball stopped at the impact next to the \
+                 object ball; not measured",
+                cd.elongation
+            ),
+        );
+        a.ball_radius_px = Some(cd.r);
+        return a;
+    }
+    let dsc = match disc::refine(&sig, &cd) {
+        Ok(d) => d,
+        Err(e) => return Analysis::declined(Status::Declined, e),
+    };
+    let mut out = Analysis::declined(Status::Declined, "");
+    out.ball_radius_px = Some(dsc.r);
+    let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
+    out.disc = Some(dsc.clone());
+    let cands = streak::find_coarse(&sig, o.0, o.1, r);
+    let ko = KeepOut {
+        ox: o.0,
+        oy: o.1,
+        radius: 1.25 * r,
+    };
+    let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+    let mut tracks: Vec<Vec<Sample>> = cands
+        .iter()
+        .take(4)
+        .map(|c| {
+            let t = streak::track(&sig, c.seed, c.dir, r, ko);
+            if debug {
+                eprintln!(
+                    "candidate seed=({:.0},{:.0}) dir=({:.3},{:.3}) weight={:.3} samples={} u={:?}",
+                    c.seed.0,
+                    c.seed.1,
+                    c.dir.0,
+                    c.dir.1,
+                    c.weight,
+                    t.len(),
+                    sig.u
+                );
+            }
+            t
+        })
+        .filter(|t| t.len() >= 5)
+        .collect();
+    // Two candidates can track the same streak (inner and outer ring): keep the longer.
+    let mut dup = vec![false; tracks.len()];
+    for a in 0..tracks.len() {
+        for b in 0..tracks.len() {
+            if a == b
+                || dup[b]
+                || tracks[a].len() > tracks[b].len()
+                || (tracks[a].len() == tracks[b].len() && a > b)
+            {
+                continue;
+            }
+            let shared = tracks[a]
+                .iter()
+                .filter(|s| {
+                    tracks[b]
+                        .iter()
+                        .any(|q| (q.x - s.x).hypot(q.y - s.y) < 0.5 * r)
+                })
+                .count();
+            if 2 * shared > tracks[a].len() {
+                dup[a] = true;
+            }
+        }
+    }
+    let mut k = 0;
+    tracks.retain(|_| {
+        k += 1;
+        !dup[k - 1]
+    });
+    // Drop samples whose profile window reaches into another streak (near the impact, crossings);
+    // this first cut only serves the scene reading, the fit uses re-measured samples below.
+    let clean: Vec<Vec<Sample>> = (0..tracks.len())
+        .map(|a| {
+            tracks[a]
+                .iter()
+                .filter(|s| {
+                    tracks.iter().enumerate().all(|(b, tb)| {
+                        if a == b || tb.is_empty() {
+                            return true;
+                        }
+                        let near = tb.iter().any(|q| (q.x - s.x).hypot(q.y - s.y) < 2.6 * r);
+                        // Extension of the other streak towards the disc (where it was not tracked).
+                        let f = tb[0];
+                        let g = tb[(tb.len() / 4).max(1).min(tb.len() - 1)];
+                        let l = (f.x - g.x).hypot(f.y - g.y).max(1e-9);
+                        let e = ((f.x - g.x) / l, (f.y - g.y) / l);
+                        let (wx, wy) = (s.x - f.x, s.y - f.y);
+                        let along = wx * e.0 + wy * e.1;
+                        let ext = (0.0..4.0 * r).contains(&along)
+                            && (e.0 * wy - e.1 * wx).abs() < 2.6 * r;
+                        !(near || ext)
+                    })
+                })
+                .copied()
+                .collect()
+        })
+        .collect();
+    let mut pairs: Vec<(Vec<Sample>, Vec<Sample>)> = tracks
+        .drain(..)
+        .zip(clean)
+        .filter(|(_, c)| c.len() >= 5)
+        .collect();
+    pairs.sort_by_key(|(_, c)| std::cmp::Reverse(c.len()));
+    pairs.truncate(3);
+    let raw: Vec<Vec<Sample>> = pairs.iter().map(|p| p.0.clone()).collect();
+    let kept: Vec<Vec<Sample>> = pairs.into_iter().map(|p| p.1).collect();
+    out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
+    let cue_stopped = match kept.len() {
+        0 => {
+            out.reason = "no streak found: no collision recorded".into();
+            return out;
+        }
+        1 => {
+            out.reason = "only one streak found (one ball only, or the others are hidden)".into();
+            return out;
+        }
+        2 => true,
+        _ => false,
+    };
+    let reading = match read_scene(&kept, o, r, cue_stopped) {
+        Ok(rd) => rd,
+        Err(e) => {
+            out.reason = e;
+            return out;
+        }
+    };
+    if cue_stopped {
+        // Only two streaks: accept "cue ball stopped" only if a stationary ball sits at P.
+        let x0 = &reading.x0;
+        let p = (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin());
+        let ring = {
+            let mut v: Vec<f32> = (0..64)
+                .filter_map(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / 64.0;
+                    sig.sample(o.0 + 1.6 * r * a.cos(), o.1 + 1.6 * r * a.sin())
+                })
+                .collect();
+            background::median(&mut v) as f64
+        };
+        if !disc_at(&sig, p, r, dsc.contrast, ring) {
+            out.reason = "only two streaks and no ball at rest at the impact point: the cue \
+                          ball's path is hidden"
+                .into();
+            return out;
+        }
+    }
+    for (i, s) in out.streaks.iter_mut().enumerate() {
+        s.0 = if i == reading.inc {
+            Role::Incoming
+        } else if Some(i) == reading.b1 {
+            Role::CueOut
+        } else if i == reading.b2 {
+            Role::ObjectOut
+        } else {
+            Role::Unused
+        };
+    }
+    // Re-measure every streak with the other balls' light (bands around their centre-lines, and
+    // the object disc) excluded, and extend it towards its start as far as its core stays clean.
+    let p_imp = {
+        let x0 = &reading.x0;
+        (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin())
+    };
+    let start_of = |i: usize| if i == reading.b2 { o } else { p_imp };
+    let roles: Vec<usize> = [Some(reading.inc), reading.b1, Some(reading.b2)]
+        .into_iter()
+        .flatten()
+        .collect();
+    let mut measured: Vec<Vec<Sample>> = kept.clone();
+    for &a in &roles {
+        let mut ex = streak::Exclusion::default();
+        // Margins: the antialiased edge (1.5 px) and, for bands, the sagitta of the sliding arc
+        // between the start and the first clean sample (≤ 0.1 R).
+        ex.discs.push((o, r + 1.5));
+        for &b in roles.iter().filter(|&&b| b != a) {
+            let mut pts = vec![start_of(b)];
+            pts.extend(kept[b].iter().map(|q| (q.x, q.y)));
+            ex.add_band(&pts, 1.1 * r + 1.5, r);
+        }
+        let m = streak::remeasure(&sig, &raw[a], start_of(a), r, &ex);
+        if m.len() >= 5 {
+            measured[a] = m;
+        }
+    }
+    for (i, s) in out.streaks.iter_mut().enumerate() {
+        s.1 = measured[i].clone();
+    }
+    let pb = Problem {
+        o_meas: o,
+        sigma_o: dsc.sigma_c.max(0.02),
+        r_meas: r,
+        sigma_r: dsc.sigma_r.max(0.01),
+        incoming: measured[reading.inc].clone(),
+        out1: reading.b1.map(|b| measured[b].clone()),
+        out2: measured[reading.b2].clone(),
+    };
+    if let Some(path) = std::env::var_os("STREAKFIT_DUMP") {
+        let mut txt = String::new();
+        for (name, v) in [
+            ("inc", Some(&pb.incoming)),
+            ("cue", pb.out1.as_ref()),
+            ("obj", Some(&pb.out2)),
+        ] {
+            for q in v.into_iter().flatten() {
+                txt.push_str(&format!("{name},{},{},{},{}\n", q.x, q.y, q.sigma, q.amp));
+            }
+        }
+        let _ = std::fs::write(path, txt);
+    }
+    let Some(fit) = pathfit::fit(&pb, &reading.x0) else {
+        out.reason = "path fit failed (too few consistent centre-line points)".into();
+        return out;
+    };
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        let med = |v: &[Sample]| {
+            let mut s: Vec<f32> = v.iter().map(|x| x.sigma as f32).collect();
+            background::median(&mut s)
+        };
+        eprintln!(
+            "fit: n=({}, {}, {}) sigma_med=({:.3}, {:.3}, {:.3}) s2={:.3?} corr={:.2?} O=({:.2},{:.2})±{:.3} R={:.3}±{:.3} params={:.4?}",
+            pb.incoming.len(),
+            pb.out1.as_ref().map_or(0, |v| v.len()),
+            pb.out2.len(),
+            med(&pb.incoming),
+            pb.out1.as_ref().map_or(0.0, |v| med(v)),
+            med(&pb.out2),
+            fit.s2,
+            fit.corr,
+            o.0,
+            o.1,
+            pb.sigma_o,
+            r,
+            pb.sigma_r,
+            fit.params
+        );
+    }
+    let psi_s = wrap(fit.psi_s());
+    let m = if psi_s < 0.0 { -1.0 } else { 1.0 };
+    out.mirror = m;
+    let deg = |v: f64| v.to_degrees();
+    out.psi_deg = Some(deg(psi_s.abs()));
+    out.psi_err_deg = Some(deg(fit.sd(4)));
+    // An angle whose fit uncertainty exceeds this is not measured (the sliding arc is hidden
+    // where the streaks overlap near the impact): it is reported as undefined, with the reason.
+    let unresolved = 10f64.to_radians();
+    let mut notes: Vec<String> = Vec::new();
+    let mut angle = |idx: usize, name: &str| -> (Option<f64>, Option<f64>) {
+        let sd = fit.sd(idx);
+        if sd.is_finite() && sd <= unresolved {
+            (Some(deg(m * wrap(fit.params[idx]))), Some(deg(sd)))
+        } else {
+            notes.push(format!(
+                "{name} not resolved (fit uncertainty {:.0}°)",
+                deg(sd).min(999.0)
+            ));
+            (None, None)
+        }
+    };
+    if let Some((id, it)) = fit.angle_indices(1) {
+        (out.delta1_deg, out.delta1_err_deg) = angle(id, "delta1");
+        // A start tangent more than 90° from the rolling direction is not a sliding arc.
+        if let Some(d) = out.delta1_deg
+            && wrap((d - deg(m * wrap(fit.params[it]))).to_radians()).abs()
+                > std::f64::consts::FRAC_PI_2
+        {
+            out.delta1_deg = None;
+            out.delta1_err_deg = None;
+        }
+        (out.theta1_deg, out.theta1_err_deg) = angle(it, "theta1");
+    }
+    let (id, it) = fit.angle_indices(2).expect("object ball always has a path");
+    (out.delta2_deg, out.delta2_err_deg) = angle(id, "delta2");
+    (out.theta2_deg, out.theta2_err_deg) = angle(it, "theta2");
+    out.path_model1 = fit.m1.map(|m| m.name().to_string());
+    out.path_model2 = Some(fit.m2.name().to_string());
+    out.ball_radius_px = Some(fit.r());
+    // Table coordinates put pixel centres at half-integers (the image's top-left corner is
+    // (0, 0)); internally a pixel's centre is at its integer index.
+    out.impact = Some((fit.impact().0 + 0.5, fit.impact().1 + 0.5));
+    out.status = Status::Ok;
+    if fit.m1.is_none() {
+        notes.insert(
+            0,
+            "cue ball stops at the impact: delta1, theta1 undefined".into(),
+        );
+    }
+    out.reason = notes.join("; ");
+    out.fit = Some(fit);
+    out
+}

@@ -1,0 +1,587 @@
+//! Streaks: coarse detection, then sub-pixel centre-lines at full resolution.
+//!
+//! Coarse: the coarse signal is box-smoothed over about one ball radius and thresholded at 4 σ of
+//! its own MAD noise; streaks are found where they cross a ring around the object disc (see
+//! [`find_coarse`]).
+//!
+//! Fine: each candidate is tracked outward (and inward towards the disc) in steps of `R/10`.
+//! At each step the cross-profile perpendicular to the current direction is sampled at 1 px over
+//! `±1.7 R` (averaged over the step length, so every pixel is used once), a straight baseline is
+//! fitted to the flanks `|t - c| > 1.15 R`, and the centre `c` is the signal-weighted centroid over
+//! `|t - c| ≤ 1.1 R`, iterated until the window is centred. For any profile symmetric about the
+//! centre-line (sweep `∝ sqrt(R² - d²)`, shaded `∝ R² - d²`, blur) this is unbiased; its standard
+//! error is `σ_c² = Σ (t - c)² σ_n² / (Σ s)²` with `σ_n` the flank scatter.
+
+use super::background::{Signal, box_blur, mad_sigma};
+
+#[derive(Debug, Clone)]
+pub struct CoarseStreak {
+    /// Seed point on the centre-line (full resolution) at about 3.5 R from the disc centre.
+    pub seed: (f64, f64),
+    /// Unit direction at the seed, pointing away from the disc.
+    pub dir: (f64, f64),
+    /// Total signal of the part (for ranking).
+    pub weight: f64,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct Sample {
+    pub x: f64,
+    pub y: f64,
+    /// 1-sigma standard error of the centre across the streak (px).
+    pub sigma: f64,
+    /// Mean baseline-subtracted signal in the core.
+    pub amp: f64,
+}
+
+/// Streak candidates leaving the neighbourhood of the disc at `(ox, oy)`, radius `r` (full-res).
+///
+/// Every streak of the shot starts or ends within `2R` of `O`, so each crosses the ring
+/// `3.5R ≤ |p - O| ≤ 4.5R` once (a short one only an inner ring around `2R`): runs of above-threshold ring samples are the crossings (this also
+/// separates streaks that touch near the impact and form one connected part). A run wider than two
+/// streaks is split in two. The seed is the run's signal-weighted centre, the direction the
+/// principal axis of the thresholded pixels within `3R` of it and beyond `3.5R` from `O`.
+pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> {
+    let (w, h) = (sig.cw, sig.ch);
+    let f = sig.f as f64;
+    let rc = r / f;
+    let rb = ((rc / 2.0).round() as usize).max(1);
+    let s = box_blur(&sig.coarse, w, h, rb);
+    let sigma = mad_sigma(&s).max(1e-7);
+    let thr = 4.0 * sigma;
+    let (ocx, ocy) = (ox / f - 0.5, oy / f - 0.5);
+    let at = |x: f64, y: f64| -> Option<f32> {
+        if x < 0.0 || y < 0.0 {
+            return None;
+        }
+        let (xi, yi) = (x.round() as usize, y.round() as usize);
+        (xi < w && yi < h).then(|| s[yi * w + xi])
+    };
+    let scan = |rho: f64| -> Vec<(f64, CoarseStreak)> {
+        let n_ang = ((std::f64::consts::TAU * rho / 0.5).ceil() as usize).max(90);
+        let mut val = vec![f32::NAN; n_ang];
+        for (k, v) in val.iter_mut().enumerate() {
+            let a = std::f64::consts::TAU * k as f64 / n_ang as f64;
+            let (mut acc, mut n) = (0.0f32, 0);
+            let mut q = rho - 0.5 * rc;
+            while q <= rho + 0.5 * rc {
+                if let Some(x) = at(ocx + q * a.cos(), ocy + q * a.sin()) {
+                    acc += x;
+                    n += 1;
+                }
+                q += 0.5;
+            }
+            if n > 0 {
+                *v = acc / n as f32;
+            }
+        }
+        let above: Vec<bool> = val.iter().map(|v| v.is_finite() && *v > thr).collect();
+        if above.iter().all(|b| *b) || !above.iter().any(|b| *b) {
+            return Vec::new();
+        }
+        // Start scanning at a gap so runs do not wrap.
+        let start = above.iter().position(|b| !*b).unwrap_or(0);
+        let mut runs: Vec<Vec<usize>> = Vec::new();
+        let mut cur: Vec<usize> = Vec::new();
+        for i in 0..n_ang {
+            let k = (start + i) % n_ang;
+            if above[k] {
+                cur.push(k);
+            } else if !cur.is_empty() {
+                runs.push(std::mem::take(&mut cur));
+            }
+        }
+        if !cur.is_empty() {
+            runs.push(cur);
+        }
+        let arc = |n: usize| n as f64 * std::f64::consts::TAU * rho / n_ang as f64;
+        let mut pieces: Vec<Vec<usize>> = Vec::new();
+        for run in runs {
+            if arc(run.len()) < 0.8 * rc {
+                continue;
+            }
+            if arc(run.len()) > 4.5 * rc {
+                let m = run.len() / 2;
+                pieces.push(run[..m].to_vec());
+                pieces.push(run[m..].to_vec());
+            } else {
+                pieces.push(run);
+            }
+        }
+        let mut out = Vec::new();
+        for piece in pieces {
+            // Weighted mean angle (unwrap relative to the first element).
+            let a0 = std::f64::consts::TAU * piece[0] as f64 / n_ang as f64;
+            let (mut sw, mut sa) = (0.0, 0.0);
+            for &k in &piece {
+                let a = std::f64::consts::TAU * k as f64 / n_ang as f64;
+                let mut da = a - a0;
+                if da < -std::f64::consts::PI {
+                    da += std::f64::consts::TAU;
+                }
+                let wgt = (val[k] - thr).max(0.0) as f64;
+                sw += wgt;
+                sa += wgt * da;
+            }
+            if sw <= 0.0 {
+                continue;
+            }
+            let phi = a0 + sa / sw;
+            let seed = (ocx + rho * phi.cos(), ocy + rho * phi.sin());
+            // Local principal axis.
+            let rad = 3.0 * rc;
+            let (x0, x1) = (
+                (seed.0 - rad).floor().max(0.0) as usize,
+                ((seed.0 + rad).ceil() as usize).min(w - 1),
+            );
+            let (y0, y1) = (
+                (seed.1 - rad).floor().max(0.0) as usize,
+                ((seed.1 + rad).ceil() as usize).min(h - 1),
+            );
+            let (mut n, mut mx, mut my) = (0.0, 0.0, 0.0);
+            let mut pts = Vec::new();
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let (dx, dy) = (x as f64 - seed.0, y as f64 - seed.1);
+                    let dox = ((x as f64 - ocx).powi(2) + (y as f64 - ocy).powi(2)).sqrt();
+                    if dx * dx + dy * dy <= rad * rad && dox >= rho - 0.5 * rc && s[y * w + x] > thr
+                    {
+                        pts.push((x as f64, y as f64));
+                        n += 1.0;
+                        mx += x as f64;
+                        my += y as f64;
+                    }
+                }
+            }
+            let radial = (phi.cos(), phi.sin());
+            let mut d = radial;
+            if n >= 5.0 {
+                let (mx, my) = (mx / n, my / n);
+                let (mut cxx, mut cyy, mut cxy) = (0.0, 0.0, 0.0);
+                for p in &pts {
+                    cxx += (p.0 - mx).powi(2);
+                    cyy += (p.1 - my).powi(2);
+                    cxy += (p.0 - mx) * (p.1 - my);
+                }
+                let tr = cxx + cyy;
+                let det = cxx * cyy - cxy * cxy;
+                let q = (tr * tr / 4.0 - det).max(0.0).sqrt();
+                // Only a clearly elongated patch has a trustworthy axis (a streak cut by the image
+                // border can be as wide as long); otherwise the radial direction is the better guess.
+                if tr / 2.0 + q > 2.5 * (tr / 2.0 - q).max(1e-9) {
+                    let ang = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+                    d = (ang.cos(), ang.sin());
+                }
+            }
+            if d.0 * radial.0 + d.1 * radial.1 < 0.0 {
+                d = (-d.0, -d.1);
+            }
+            out.push((
+                phi,
+                CoarseStreak {
+                    seed: ((seed.0 + 0.5) * f, (seed.1 + 0.5) * f),
+                    dir: d,
+                    weight: sw,
+                },
+            ));
+        }
+        out
+    };
+    let mut found = scan(4.0 * rc);
+    // Crossings with a tiny fraction of the strongest one's light are noise.
+    let wmax = found.iter().map(|(_, c)| c.weight).fold(0.0, f64::max);
+    found.retain(|(_, c)| c.weight >= 0.05 * wmax);
+    // A short streak (a slow object ball in a grazing shot) may end before the outer ring; an
+    // inner ring at 2R adds crossings in new directions (duplicates are removed after tracking).
+    if found.len() < 3 {
+        let inner = scan(2.0 * rc);
+        for (phi, c) in inner.into_iter().filter(|(_, c)| c.weight >= 0.05 * wmax) {
+            let new = found.iter().all(|(p, _)| {
+                let d = (phi - p).rem_euclid(std::f64::consts::TAU);
+                d.min(std::f64::consts::TAU - d) > 35f64.to_radians()
+            });
+            if new {
+                found.push((phi, c));
+            }
+        }
+    }
+    let mut out: Vec<CoarseStreak> = found.into_iter().map(|(_, c)| c).collect();
+    out.sort_by(|a, b| b.weight.total_cmp(&a.weight));
+    out
+}
+
+/// Result of one cross-profile: centre offset along the normal, its sigma, core amplitude and
+/// flank noise.
+#[derive(Debug, Clone, Copy)]
+pub struct ProfileCentre {
+    pub c: f64,
+    pub sigma: f64,
+    pub amp: f64,
+    pub noise: f64,
+    pub n_core: f64,
+}
+
+/// Measures the streak centre on the line through `p` perpendicular to unit `d`.
+pub fn profile_centre(
+    sig: &Signal,
+    p: (f64, f64),
+    d: (f64, f64),
+    r: f64,
+    step: f64,
+    excl: Option<&Exclusion>,
+) -> Option<ProfileCentre> {
+    let n = (-d.1, d.0);
+    let half = (1.7 * r).ceil() as i64;
+    let n_a = (step.round() as usize).max(1);
+    let mut t = Vec::with_capacity(2 * half as usize + 1);
+    let mut v = Vec::with_capacity(2 * half as usize + 1);
+    for k in -half..=half {
+        let tk = k as f64;
+        let mut acc = 0.0f32;
+        let mut inside = true;
+        for j in 0..n_a {
+            let a = (j as f64 + 0.5) / n_a as f64 * step - step / 2.0;
+            let x = p.0 + a * d.0 + tk * n.0;
+            let y = p.1 + a * d.1 + tk * n.1;
+            match sig.sample(x, y) {
+                Some(v) => acc += v,
+                None => {
+                    inside = false;
+                    break;
+                }
+            }
+        }
+        // Near the border only the flanks may be cut off; the core must be complete.
+        if !inside {
+            if tk.abs() <= 1.25 * r {
+                return None;
+            }
+            continue;
+        }
+        t.push(tk);
+        v.push((acc / n_a as f32) as f64);
+    }
+    // Points inside another ball's band (or the disc) carry that ball's light: they may not be
+    // in the core, and are left out of the baseline.
+    let bad: Vec<bool> = match excl {
+        Some(e) => t
+            .iter()
+            .map(|tk| e.contains(p.0 + tk * n.0, p.1 + tk * n.1))
+            .collect(),
+        None => vec![false; t.len()],
+    };
+    let mut c = 0.0;
+    let mut res = None;
+    for _it in 0..6 {
+        // Baseline from the flanks.
+        let (mut s1, mut st, mut stt, mut sv, mut stv) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut nl, mut nr) = (0, 0);
+        for ((tk, vk), b) in t.iter().zip(&v).zip(&bad) {
+            let dd = tk - c;
+            if *b {
+                if dd.abs() < 1.2 * r {
+                    return None;
+                }
+                continue;
+            }
+            if dd.abs() >= 1.15 * r {
+                s1 += 1.0;
+                st += tk;
+                stt += tk * tk;
+                sv += vk;
+                stv += tk * vk;
+                if dd < 0.0 {
+                    nl += 1;
+                } else {
+                    nr += 1;
+                }
+            }
+        }
+        if s1 < 4.0 {
+            return None;
+        }
+        let (b0, b1) = if nl as f64 >= 0.15 * r && nr as f64 >= 0.15 * r {
+            let den = s1 * stt - st * st;
+            let b1 = (s1 * stv - st * sv) / den;
+            ((sv - b1 * st) / s1, b1)
+        } else {
+            (sv / s1, 0.0)
+        };
+        let mut flank = Vec::new();
+        let (mut sw, mut swt, mut swr) = (0.0, 0.0, 0.0);
+        let mut nc = 0.0;
+        for ((tk, vk), b) in t.iter().zip(&v).zip(&bad) {
+            let s = vk - (b0 + b1 * tk);
+            let dd = (tk - c).abs();
+            if *b {
+                continue;
+            }
+            if dd >= 1.15 * r {
+                flank.push(s as f32);
+            }
+            let wgt = (1.1 * r + 0.5 - dd).clamp(0.0, 1.0);
+            if wgt > 0.0 {
+                sw += wgt * s;
+                swt += wgt * s * tk;
+                swr += wgt;
+                nc += wgt;
+            }
+        }
+        if sw <= 0.0 {
+            return None;
+        }
+        let c_new = swt / sw;
+        let noise = (mad_sigma(&flank) as f64).max(1e-9);
+        let mut var = 0.0;
+        for tk in &t {
+            let dd = (tk - c_new).abs();
+            let wgt = (1.1 * r + 0.5 - dd).clamp(0.0, 1.0);
+            var += wgt * wgt * (tk - c_new).powi(2);
+        }
+        let sigma = (var.sqrt() * noise / sw).max(1e-3);
+        res = Some(ProfileCentre {
+            c: c_new,
+            sigma,
+            amp: sw / swr,
+            noise,
+            n_core: nc * n_a as f64,
+        });
+        if (c_new - c).abs() < 1e-3 {
+            break;
+        }
+        if c_new.abs() > 1.2 * r {
+            return None;
+        }
+        c = c_new;
+    }
+    res
+}
+
+/// Where to stop tracking: the disc of the object ball (no profile line may come within
+/// `keep_out` of its centre).
+#[derive(Debug, Clone, Copy)]
+pub struct KeepOut {
+    pub ox: f64,
+    pub oy: f64,
+    pub radius: f64,
+}
+
+/// Tracks a streak from `seed` along `dir` (and backwards towards the disc), returning the
+/// centre-line samples ordered from the disc end outward.
+pub fn track(
+    sig: &Signal,
+    seed: (f64, f64),
+    dir: (f64, f64),
+    r: f64,
+    keep_out: KeepOut,
+) -> Vec<Sample> {
+    let step = (r / 10.0).max(2.0);
+    let outward = walk(sig, seed, dir, r, step, keep_out);
+    let inward = walk(sig, seed, (-dir.0, -dir.1), r, step, keep_out);
+    let mut all: Vec<Sample> = inward.into_iter().skip(1).rev().collect();
+    all.extend(outward);
+    all
+}
+
+fn walk(
+    sig: &Signal,
+    seed: (f64, f64),
+    dir: (f64, f64),
+    r: f64,
+    step: f64,
+    ko: KeepOut,
+) -> Vec<Sample> {
+    let mut out: Vec<Sample> = Vec::new();
+    let mut p = seed;
+    let mut d = dir;
+    let mut fails = 0;
+    let max_steps = (4.0 * (sig.w + sig.h) as f64 / step) as usize;
+    for _ in 0..max_steps {
+        // The profile line must stay clear of the disc.
+        let n = (-d.1, d.0);
+        let (qx, qy) = (p.0 - ko.ox, p.1 - ko.oy);
+        let along_n = qx * n.0 + qy * n.1;
+        let perp = (qx * d.0 + qy * d.1).abs();
+        let half = 1.7 * r;
+        let closest = if along_n.abs() <= half {
+            perp
+        } else {
+            (perp * perp + (along_n.abs() - half).powi(2)).sqrt()
+        };
+        if closest < ko.radius {
+            break;
+        }
+        let Some(pc) = profile_centre(sig, p, d, r, step, None) else {
+            break;
+        };
+        let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
+        // The streak ends where its light falls well below its running level (the ball stopped
+        // or the streak faded); the last half radius before that is its rounded end, left out.
+        let faded = out.len() >= 5 && {
+            let mut a: Vec<f32> = out.iter().rev().take(40).map(|s| s.amp as f32).collect();
+            (pc.amp as f32) < 0.35 * super::background::median(&mut a)
+        };
+        if snr < 5.0 || faded {
+            fails += 1;
+            if fails >= 3 {
+                let trim = (0.5 * r / step).ceil() as usize;
+                out.truncate(out.len().saturating_sub(trim));
+                break;
+            }
+            p = (p.0 + step * d.0, p.1 + step * d.1);
+            continue;
+        }
+        fails = 0;
+        let q = (p.0 + pc.c * n.0, p.1 + pc.c * n.1);
+        out.push(Sample {
+            x: q.0,
+            y: q.1,
+            sigma: pc.sigma,
+            amp: pc.amp,
+        });
+        // Direction from the chord over the last ~2R of samples (follows the parabola, ignores
+        // single-sample noise).
+        let back = ((2.0 * r / step) as usize).max(2);
+        if out.len() > back / 2 {
+            let a = &out[out.len().saturating_sub(back + 1)];
+            let (dx, dy) = (q.0 - a.x, q.1 - a.y);
+            let l = dx.hypot(dy);
+            if l > 0.5 * r {
+                let nd = (dx / l, dy / l);
+                // Never turn back on itself.
+                if nd.0 * d.0 + nd.1 * d.1 > 0.5 {
+                    d = nd;
+                }
+            }
+        }
+        p = (q.0 + step * d.0, q.1 + step * d.1);
+    }
+    out
+}
+
+/// Regions where another ball's light falls: bands of half-width `half` around polylines, and
+/// discs.
+#[derive(Debug, Clone, Default)]
+pub struct Exclusion {
+    pub bands: Vec<(Vec<(f64, f64)>, f64)>,
+    pub discs: Vec<((f64, f64), f64)>,
+}
+
+fn seg_dist2(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (qx, qy) = (a.0 + t * dx - p.0, a.1 + t * dy - p.1);
+    qx * qx + qy * qy
+}
+
+impl Exclusion {
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        self.discs
+            .iter()
+            .any(|(c, rr)| (x - c.0).powi(2) + (y - c.1).powi(2) < rr * rr)
+            || self.bands.iter().any(|(pts, h)| {
+                pts.windows(2)
+                    .any(|w| seg_dist2((x, y), w[0], w[1]) < h * h)
+            })
+    }
+
+    /// Adds a band along `pts`, decimated to vertices about `step` apart (paths are smooth on
+    /// that scale).
+    pub fn add_band(&mut self, pts: &[(f64, f64)], half: f64, step: f64) {
+        let mut out: Vec<(f64, f64)> = Vec::new();
+        for (i, p) in pts.iter().enumerate() {
+            let keep = out
+                .last()
+                .is_none_or(|q: &(f64, f64)| (p.0 - q.0).hypot(p.1 - q.1) >= step)
+                || i + 1 == pts.len();
+            if keep {
+                out.push(*p);
+            }
+        }
+        if out.len() >= 2 {
+            self.bands.push((out, half));
+        }
+    }
+}
+
+/// Re-measures a streak's centre-line at its samples with other balls' light excluded, and
+/// extends it towards `start` (the impact or the disc) while the core stays clean.
+pub fn remeasure(
+    sig: &Signal,
+    samples: &[Sample],
+    start: (f64, f64),
+    r: f64,
+    excl: &Exclusion,
+) -> Vec<Sample> {
+    let step = (r / 10.0).max(2.0);
+    let n = samples.len();
+    let dir_at = |i: usize| {
+        let k = ((2.0 * r / step) as usize).max(1);
+        let (a, b) = (&samples[i.saturating_sub(k)], &samples[(i + k).min(n - 1)]);
+        let (dx, dy) = (b.x - a.x, b.y - a.y);
+        let l = dx.hypot(dy).max(1e-9);
+        (dx / l, dy / l)
+    };
+    let mut out = Vec::new();
+    // Inward extension, from the first sample back towards the start point.
+    if n >= 2 {
+        let d = dir_at(0);
+        let mut p = (samples[0].x - step * d.0, samples[0].y - step * d.1);
+        let mut ext = Vec::new();
+        let dist0 = (samples[0].x - start.0).hypot(samples[0].y - start.1);
+        let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+        for _ in 0..((dist0 / step) as usize) {
+            let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl)) else {
+                if debug {
+                    eprintln!(
+                        "extension stops at ({:.0},{:.0}): profile rejected",
+                        p.0, p.1
+                    );
+                }
+                break;
+            };
+            let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
+            if snr < 5.0 || pc.c.abs() > 0.15 * r {
+                if debug {
+                    eprintln!(
+                        "extension stops at ({:.0},{:.0}): snr {snr:.1} c {:.2}",
+                        p.0, p.1, pc.c
+                    );
+                }
+                break;
+            }
+            let q = (p.0 - pc.c * d.1, p.1 + pc.c * d.0);
+            ext.push(Sample {
+                x: q.0,
+                y: q.1,
+                sigma: pc.sigma,
+                amp: pc.amp,
+            });
+            // Step along the extrapolated line, not from the measured centre, so light from
+            // elsewhere cannot drag the extension off the streak.
+            p = (p.0 - step * d.0, p.1 - step * d.1);
+        }
+        out.extend(ext.into_iter().rev());
+    }
+    for i in 0..n {
+        let d = dir_at(i);
+        let p = (samples[i].x, samples[i].y);
+        if let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl)) {
+            let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
+            if snr >= 5.0 && pc.c.abs() < 0.3 * r {
+                out.push(Sample {
+                    x: p.0 - pc.c * d.1,
+                    y: p.1 + pc.c * d.0,
+                    sigma: pc.sigma,
+                    amp: pc.amp,
+                });
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,232 @@
+//! `streakfit extract` end to end: synthetic photographs with known truth (written by
+//! `streakfit synth`) through the extractor, plus the batch guarantees (one row per image, bad
+//! files become `error` rows, shards concatenate, overlays written).
+//!
+//! Images are 1200×800 (R ≈ 52 px) to keep the suite fast; run with
+//! `cargo test --release --test extract`.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use streakfit::table::{ShotRow, Status, read_angle_table};
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_streakfit")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("streakfit_extract_{}_{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn synth(dir: &Path, tier: &str, shots: usize, seed: u64, extra: &[&str]) {
+    let st = Command::new(bin())
+        .args(["synth", "--out"])
+        .arg(dir)
+        .args([
+            "--tier",
+            tier,
+            "--shots",
+            &shots.to_string(),
+            "--seed",
+            &seed.to_string(),
+        ])
+        .args(["--size", "1200x800"])
+        .args(extra)
+        .status()
+        .unwrap();
+    assert!(st.success(), "synth failed");
+}
+
+fn extract(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(bin())
+        .arg("extract")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Truth table: file → column → value.
+fn truth(dir: &Path) -> HashMap<String, HashMap<String, String>> {
+    let text = std::fs::read_to_string(dir.join("truth.csv")).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            let vals: Vec<String> = l.split(',').map(String::from).collect();
+            let m: HashMap<String, String> = head.iter().cloned().zip(vals).collect();
+            (m["file"].clone(), m)
+        })
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Runs synth + extract and returns per-angle absolute errors of the `ok` rows and the rows.
+fn accuracy(
+    tier: &str,
+    seed: u64,
+    shots: usize,
+) -> (HashMap<&'static str, Vec<f64>>, Vec<ShotRow>) {
+    let dir = scratch(&format!("acc_{tier}"));
+    // Near head-on shots (a ball stopping at the impact) are the subject of their own test.
+    synth(&dir, tier, shots, seed, &["--psi", "15:75"]);
+    let out = dir.join("angles.csv");
+    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    assert!(o.status.code().is_some(), "extract crashed");
+    let rows = read_angle_table(&out).unwrap();
+    assert_eq!(rows.len(), shots, "one row per image");
+    let t = truth(&dir);
+    let mut errs: HashMap<&'static str, Vec<f64>> = HashMap::new();
+    for r in rows.iter().filter(|r| r.status == Status::Ok) {
+        let tr = &t[&r.file];
+        for (name, v) in [
+            ("psi", r.psi_deg),
+            ("theta1", r.theta1_deg),
+            ("theta2", r.theta2_deg),
+            ("delta2", r.delta2_deg),
+        ] {
+            if let (Some(v), Ok(tv)) = (v, tr[&format!("{name}_deg")].parse::<f64>()) {
+                errs.entry(name).or_default().push((v - tv).abs());
+            }
+        }
+        let tr_r: f64 = tr["ball_radius_px"].parse().unwrap();
+        errs.entry("radius")
+            .or_default()
+            .push((r.ball_radius_px.unwrap() - tr_r).abs());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    (errs, rows)
+}
+
+#[test]
+fn clean_tier_accuracy() {
+    let (errs, rows) = accuracy("clean", 11, 6);
+    let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
+    assert!(ok >= 5, "ok {ok}/6: {rows:#?}");
+    for r in rows.iter().filter(|r| r.status == Status::Ok) {
+        assert_eq!(r.material, "billiard");
+        assert!(r.psi_err_deg.unwrap() > 0.0);
+        assert!(["line", "parabola+line"].contains(&r.path_model2.as_deref().unwrap()));
+    }
+    let m = |k: &str| median(errs[k].clone());
+    assert!(m("radius") < 0.3, "radius median error {}", m("radius"));
+    assert!(m("psi") < 0.6, "psi median error {}", m("psi"));
+    assert!(m("theta1") < 1.0, "theta1 median error {}", m("theta1"));
+    assert!(m("theta2") < 0.6, "theta2 median error {}", m("theta2"));
+    assert!(m("delta2") < 0.8, "delta2 median error {}", m("delta2"));
+}
+
+#[test]
+fn realistic_tier_accuracy() {
+    let (errs, rows) = accuracy("realistic", 12, 6);
+    let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
+    assert!(ok >= 4, "ok {ok}/6: {rows:#?}");
+    let m = |k: &str| median(errs[k].clone());
+    assert!(m("psi") < 1.5, "psi median error {}", m("psi"));
+    assert!(m("theta1") < 2.0, "theta1 median error {}", m("theta1"));
+    assert!(m("theta2") < 1.5, "theta2 median error {}", m("theta2"));
+}
+
+#[test]
+fn one_row_per_image_with_bad_files_shards_and_overlays() {
+    let dir = scratch("batch");
+    synth(&dir, "clean", 2, 5, &[]);
+    std::fs::write(
+        dir.join("corrupt.png"),
+        b"\x89PNG\r\n\x1a\nthis is not a png at all",
+    )
+    .unwrap();
+    std::fs::write(dir.join("empty.jpg"), b"").unwrap();
+    image::RgbImage::new(300, 200)
+        .save(dir.join("black.png"))
+        .unwrap();
+    image::RgbImage::new(1, 1)
+        .save(dir.join("tiny.tif"))
+        .unwrap();
+    let out = dir.join("angles.parquet");
+    let ov = dir.join("overlays");
+    let o = extract(&[
+        dir.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--overlays".as_ref(),
+        ov.as_os_str(),
+        "--jobs".as_ref(),
+        "2".as_ref(),
+    ]);
+    // Error rows make the exit code 1, but the table is complete.
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let rows = read_angle_table(&out).unwrap();
+    let by: HashMap<&str, &ShotRow> = rows.iter().map(|r| (r.file.as_str(), r)).collect();
+    assert_eq!(rows.len(), 6, "{rows:#?}");
+    assert_eq!(by["corrupt.png"].status, Status::Error);
+    assert_eq!(by["empty.jpg"].status, Status::Error);
+    assert!(
+        by["empty.jpg"].reason.contains("empty"),
+        "{}",
+        by["empty.jpg"].reason
+    );
+    assert_eq!(by["tiny.tif"].status, Status::Error);
+    assert_eq!(by["black.png"].status, Status::Declined);
+    assert!(by["black.png"].psi_deg.is_none());
+    for f in ["shot_001.png", "shot_002.png"] {
+        assert_eq!(by[f].status, Status::Ok, "{f}: {}", by[f].reason);
+        let pic = image::open(ov.join(f.replace(".png", "_overlay.png"))).unwrap();
+        assert_eq!((pic.width(), pic.height()), (1200, 800));
+    }
+    // Shards 1/2 and 2/2 partition the images.
+    let mut files = Vec::new();
+    for k in ["1/2", "2/2"] {
+        let so = dir.join(format!("shard{}.csv", &k[..1]));
+        extract(&[
+            dir.as_os_str(),
+            "--out".as_ref(),
+            so.as_os_str(),
+            "--shard".as_ref(),
+            k.as_ref(),
+        ]);
+        files.extend(read_angle_table(&so).unwrap().into_iter().map(|r| r.file));
+    }
+    files.sort();
+    let mut all: Vec<String> = rows.iter().map(|r| r.file.clone()).collect();
+    all.sort();
+    assert_eq!(files, all);
+    // Bad usage: exit code 2 with the flag named.
+    let bad = extract(&[dir.as_os_str(), "--out".as_ref(), "x.txt".as_ref()]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--out"));
+    let bad = extract(&[
+        dir.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--shard".as_ref(),
+        "3/2".as_ref(),
+    ]);
+    assert_eq!(bad.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn plate_is_not_a_shot_and_is_used() {
+    let dir = scratch("plate");
+    synth(&dir, "clean", 2, 7, &["--background"]);
+    let out = dir.join("angles.csv");
+    extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    let rows = read_angle_table(&out).unwrap();
+    assert_eq!(rows.len(), 2, "background.png must not be a row: {rows:#?}");
+    assert!(rows.iter().all(|r| r.file.starts_with("shot_")));
+    let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
+    assert_eq!(ok, 2, "{rows:#?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
