@@ -693,16 +693,33 @@ pub fn build_frame(p: &ShotPlan) -> Frame {
 }
 
 /// Pixel positions on the centre line of the incoming cue-ball streak, from the start of the
-/// exposure to four radii before the impact (clear of the object ball's disc), inside the image.
+/// exposure to four radii before the impact (clear of the object ball's disc), inside the image,
+/// and more than 2.2 ball radii from every other path of the exposure (the outgoing balls, e.g.
+/// a drawn cue ball coming back, and a stray ball), so only the incoming streak is measured.
 pub fn streak_samples(p: &ShotPlan) -> Vec<[f64; 2]> {
     let (m, _) = motion(p);
+    let cam = &p.camera;
+    let r_px = cam.scale_at(Vector2::zeros(), m.radius) * m.radius;
+    // Other paths as dense point lists (about one point per 2 mm of travel).
+    let n_other = 1000;
+    let mut others: Vec<Vector2<f64>> = Vec::new();
+    for i in 0..=n_other {
+        let t = m.t1 * i as f64 / n_other as f64;
+        others.push(cam.project(m.cue_out.position(t), m.radius));
+        others.push(cam.project(m.object.position(t), m.radius));
+        if let Some(s) = p.stray {
+            let ts = m.t0 + (m.t1 - m.t0) * i as f64 / n_other as f64;
+            others.push(cam.project(s.p0 + s.v * (ts - m.t0), m.radius));
+        }
+    }
     let t_end = -4.0 * m.radius / p.speed_mps;
     let n = 200;
     (0..n)
         .filter_map(|i| {
             let t = m.t0 + (t_end - m.t0) * (i as f64 + 0.5) / n as f64;
-            let q = p.camera.project(m.cue_in.position(t), m.radius);
-            p.camera.contains(q, -2.0).then_some([q.x, q.y])
+            let q = cam.project(m.cue_in.position(t), m.radius);
+            let clear = others.iter().all(|o| (o - q).norm() > 2.2 * r_px);
+            (cam.contains(q, -2.0) && clear).then_some([q.x, q.y])
         })
         .collect()
 }
