@@ -59,19 +59,13 @@ pub fn copy_gallery(input: &ReportInput, dir: &Path) -> Result<Vec<GalleryItem>>
         let Some(src_dir) = &folder.overlays else {
             continue;
         };
-        let mut rows: Vec<&crate::table::ShotRow> = folder.rows.iter().collect();
-        rows.sort_by_key(|r| (r.status == Status::Ok, r.file.clone()));
+        let rows = gallery_pick(&folder.rows, input.gallery_per_folder, |r| {
+            src_dir.join(crate::extract::overlay_name(&r.file)).exists()
+        });
         let dest = dir.join("overlays").join(&folder.name);
-        let mut n = 0;
         for r in rows {
-            if n >= input.gallery_per_folder {
-                break;
-            }
             let name = crate::extract::overlay_name(&r.file);
             let src = src_dir.join(&name);
-            if !src.exists() {
-                continue;
-            }
             std::fs::create_dir_all(&dest)
                 .with_context(|| format!("creating {}", dest.display()))?;
             let img =
@@ -101,10 +95,39 @@ pub fn copy_gallery(input: &ReportInput, dir: &Path) -> Result<Vec<GalleryItem>>
                 status: r.status.as_str().to_string(),
                 reason: r.reason.clone(),
             });
-            n += 1;
         }
     }
     Ok(out)
+}
+
+/// Up to `n` rows (with an overlay) for the gallery: up to half of them declined or failed (they
+/// need a look), the rest measured, each group in file order; a group that runs short leaves its
+/// places to the other. Returned declined/failed first.
+pub fn gallery_pick(
+    rows: &[crate::table::ShotRow],
+    n: usize,
+    has_overlay: impl Fn(&crate::table::ShotRow) -> bool,
+) -> Vec<&crate::table::ShotRow> {
+    let mut bad: Vec<&crate::table::ShotRow> = rows
+        .iter()
+        .filter(|r| r.status != Status::Ok && has_overlay(r))
+        .collect();
+    let mut good: Vec<&crate::table::ShotRow> = rows
+        .iter()
+        .filter(|r| r.status == Status::Ok && has_overlay(r))
+        .collect();
+    bad.sort_by(|a, b| a.file.cmp(&b.file));
+    good.sort_by(|a, b| a.file.cmp(&b.file));
+    let n_bad = bad
+        .len()
+        .min(n.div_ceil(2))
+        .max(n.saturating_sub(good.len()))
+        .min(bad.len());
+    let n_good = good.len().min(n - n_bad);
+    bad.truncate(n_bad);
+    good.truncate(n_good);
+    bad.extend(good);
+    bad
 }
 
 const CSS: &str = "body{font-family:'DejaVu Sans',Verdana,sans-serif;max-width:1500px;margin:1.5em auto;\
@@ -526,6 +549,37 @@ pub fn render_markdown(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gallery_mixes_declined_and_measured() {
+        use crate::table::ShotRow;
+        let mk =
+            |i: usize, st: Status| ShotRow::failed(format!("shot_{i:03}.png"), st, "", "steel");
+        let mut rows: Vec<ShotRow> = (0..10).map(|i| mk(i, Status::Ok)).collect();
+        rows.extend((10..20).map(|i| mk(i, Status::Declined)));
+        let pick = gallery_pick(&rows, 5, |_| true);
+        let files: Vec<&str> = pick.iter().map(|r| r.file.as_str()).collect();
+        assert_eq!(
+            files,
+            [
+                "shot_010.png",
+                "shot_011.png",
+                "shot_012.png",
+                "shot_000.png",
+                "shot_001.png"
+            ]
+        );
+        // Only two measured shots: the declined ones fill the remaining places.
+        let pick = gallery_pick(&rows[8..], 6, |_| true);
+        assert_eq!(pick.iter().filter(|r| r.status == Status::Ok).count(), 2);
+        assert_eq!(pick.len(), 6);
+        // Shots without an overlay are never picked.
+        assert!(
+            gallery_pick(&rows, 4, |r| r.status == Status::Ok)
+                .iter()
+                .all(|r| r.status == Status::Ok)
+        );
+    }
 
     #[test]
     fn escaping_and_plus_minus() {
