@@ -441,6 +441,7 @@ struct ModelFit {
 }
 
 const MAX_ITER: usize = 60;
+const PROFILE_ITER: usize = 8;
 
 fn problem<'a>(
     shots: &'a [ShotData],
@@ -512,7 +513,29 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
     let regimes = vec![regime; shots.len()];
     let p = problem(shots, regimes.clone(), model, opts);
     let mut best: Option<Solution> = None;
-    for g in grid_starts(shots, &regimes, model, opts) {
+    let starts = grid_starts(shots, &regimes, model, opts);
+    // Many shots: choose among the starts on a subsample of about 100 shots, then polish once.
+    let starts = if shots.len() > 150 {
+        let step = shots.len().div_ceil(100);
+        let sub: Vec<ShotData> = shots.iter().step_by(step).cloned().collect();
+        let ps = problem(&sub, vec![regime; sub.len()], model, opts);
+        let mut scored: Vec<(f64, [f64; NG])> = starts
+            .iter()
+            .map(|g| {
+                let st = State {
+                    g: *g,
+                    l: sub.iter().map(ShotData::start_locals).collect(),
+                };
+                let sol = ps.solve(st, MAX_ITER);
+                (sol.cost, sol.state.g)
+            })
+            .collect();
+        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        vec![scored[0].1]
+    } else {
+        starts
+    };
+    for g in starts {
         let st = State {
             g,
             l: shots.iter().map(ShotData::start_locals).collect(),
@@ -531,17 +554,23 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
 }
 
 /// Two-regime model: profile chi² over the stick/slip partition ordered by each shot's critical
-/// `mu0` (see [`critical_mu_static`]), warm-started from the better single-regime fit.
-fn fit_two_regime(shots: &[ShotData], start: &Solution, opts: &FitOptions) -> Option<ModelFit> {
+/// `mu0` (see [`critical_mu_static`]), warm-started from `(g0, l0)` (the better single-regime
+/// fit). Up to 60 shots every threshold is fitted. With more shots the globals come from the
+/// exhaustive profile of a 60-shot subsample; holding them there, moving the threshold by one
+/// shot changes only that shot's chi² (its latents re-fitted in each regime), so the profile
+/// over all `n` thresholds is a prefix sum, O(n); the best threshold is then polished by a full
+/// fit.
+fn fit_two_regime(
+    shots: &[ShotData],
+    g0: [f64; NG],
+    l0: &[[f64; NL]],
+    opts: &FitOptions,
+) -> Option<ModelFit> {
     let n = shots.len();
     if n < 4 {
         return None;
     }
-    let crit: Vec<f64> = shots
-        .iter()
-        .zip(&start.state.l)
-        .map(|(_, l)| critical_mu_static(start.state.g[0], l))
-        .collect();
+    let crit: Vec<f64> = l0.iter().map(|l| critical_mu_static(g0[0], l)).collect();
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| crit[a].total_cmp(&crit[b]));
     let model = Model::TwoRegime;
@@ -553,78 +582,108 @@ fn fit_two_regime(shots: &[ShotData], start: &Solution, opts: &FitOptions) -> Op
         }
         r
     };
-    let mut profile: BTreeMap<usize, Solution> = BTreeMap::new();
-    let eval = |k: usize, profile: &mut BTreeMap<usize, Solution>| {
-        if profile.contains_key(&k) {
-            return;
-        }
-        let p = problem(shots, regimes_for(k), model, opts);
-        // Warm start from the nearest evaluated threshold, else from the single-regime fit.
-        let near = profile
-            .iter()
-            .min_by_key(|(kk, _)| kk.abs_diff(k))
-            .map(|(_, s)| s.state.clone());
-        let mut st = near.unwrap_or_else(|| start.state.clone());
-        st.g[3] = crit[order[k - 1]];
-        let sol = p.solve(st, MAX_ITER);
-        profile.insert(k, sol);
-    };
     let (lo_k, hi_k) = (1, n - 1);
+    // Profile: threshold k -> chi² (robust cost).
+    let mut profile: BTreeMap<usize, f64> = BTreeMap::new();
+    let best_state: State;
     if n <= 60 {
-        for k in lo_k..=hi_k {
-            eval(k, &mut profile);
-        }
-    } else {
-        let coarse = 16;
-        for j in 0..=coarse {
-            eval(lo_k + (hi_k - lo_k) * j / coarse, &mut profile);
-        }
-        let mut step = (hi_k - lo_k) / coarse;
-        let best_k = |p: &BTreeMap<usize, Solution>| {
-            p.iter()
-                .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
-                .map(|(k, _)| *k)
-                .unwrap()
+        let mut state = State {
+            g: g0,
+            l: l0.to_vec(),
         };
-        while step > 1 {
-            step = step.div_ceil(2);
-            let b = best_k(&profile);
-            for k in [b.saturating_sub(step).max(lo_k), (b + step).min(hi_k)] {
-                eval(k, &mut profile);
+        let mut best: Option<(f64, State)> = None;
+        for k in lo_k..=hi_k {
+            // Neighbouring thresholds differ by one shot: warm start from the previous one.
+            let sol =
+                problem(shots, regimes_for(k), model, opts).solve(state.clone(), PROFILE_ITER);
+            profile.insert(k, sol.cost);
+            if best.as_ref().is_none_or(|b| sol.cost < b.0) {
+                best = Some((sol.cost, sol.state.clone()));
             }
+            state = sol.state;
         }
-        let b = best_k(&profile);
-        for k in [
-            b.saturating_sub(2).max(lo_k),
-            b.saturating_sub(1).max(lo_k),
-            (b + 1).min(hi_k),
-            (b + 2).min(hi_k),
-        ] {
-            eval(k, &mut profile);
+        best_state = best?.1;
+    } else {
+        let huber = match opts.loss {
+            Loss::Squared => None,
+            Loss::Huber(k) => Some(k),
+        };
+        let mut state = State {
+            g: g0,
+            l: l0.to_vec(),
+        };
+        let mut last_k = None;
+        // Alternate: O(n) profile at fixed globals, full fit at the best threshold.
+        for _ in 0..4 {
+            let g = state.g;
+            let l_now = state.l.clone();
+            let per_shot = |i: usize| {
+                let one = |reg: Regime| {
+                    Problem {
+                        shots: vec![&shots[i]],
+                        regimes: vec![reg],
+                        free_global: [false; NG],
+                        huber,
+                    }
+                    .solve(
+                        State {
+                            g,
+                            l: vec![l_now[i]],
+                        },
+                        10,
+                    )
+                };
+                let (s, m) = (one(Regime::SlipMu), one(Regime::MuMu));
+                (s.cost, m.cost, s.state.l[0], m.state.l[0])
+            };
+            use rayon::prelude::*;
+            let parts: Vec<(f64, f64, [f64; NL], [f64; NL])> =
+                (0..n).into_par_iter().map(per_shot).collect();
+            profile.clear();
+            let mut cost: f64 = order.iter().map(|&i| parts[i].1).sum();
+            for (j, &i) in order.iter().enumerate().take(hi_k) {
+                cost += parts[i].0 - parts[i].1;
+                profile.insert(j + 1, cost);
+            }
+            let (&k, _) = profile.iter().min_by(|a, b| a.1.total_cmp(b.1))?;
+            if last_k == Some(k) {
+                break;
+            }
+            last_k = Some(k);
+            let mut rank = vec![0; n];
+            for (j, &i) in order.iter().enumerate() {
+                rank[i] = j;
+            }
+            let l = (0..n)
+                .map(|i| if rank[i] < k { parts[i].2 } else { parts[i].3 })
+                .collect();
+            state = problem(shots, regimes_for(k), model, opts)
+                .solve(State { g, l }, MAX_ITER)
+                .state;
         }
+        best_state = state;
     }
-    let (&best_k, best) = profile
-        .iter()
-        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))?;
-    let best = best.clone();
+    let (&best_k, &best_cost) = profile.iter().min_by(|a, b| a.1.total_cmp(b.1))?;
+    let best = problem(shots, regimes_for(best_k), model, opts).solve(best_state, MAX_ITER);
     // Critical mu0 of each shot at the fitted e and true psi.
-    let crit_fit: Vec<f64> = shots
+    let crit_fit: Vec<f64> = best
+        .state
+        .l
         .iter()
-        .zip(&best.state.l)
-        .map(|(_, l)| critical_mu_static(best.state.g[0], l))
+        .map(|l| critical_mu_static(best.state.g[0], l))
         .collect();
     let sorted: Vec<f64> = order.iter().map(|&i| crit_fit[i]).collect();
     let gap = |k: usize| (sorted[k - 1], sorted[k]);
     let (a, b) = gap(best_k);
     let mu0 = 0.5 * (a + b);
-    // 1-sigma interval: every evaluated threshold within Δchi² ≤ 1 of the best.
+    // 1-sigma interval: every threshold within Δchi² ≤ 1 of the best.
     let within: Vec<usize> = profile
         .iter()
-        .filter(|(_, s)| s.cost - best.cost <= 1.0)
+        .filter(|(_, c)| **c - best_cost <= 1.0)
         .map(|(k, _)| *k)
         .collect();
-    let klo = *within.iter().min().unwrap();
-    let khi = *within.iter().max().unwrap();
+    let klo = *within.iter().min()?;
+    let khi = *within.iter().max()?;
     let (lo, hi) = (gap(klo).0.min(a), gap(khi).1.max(b));
     let se = (hi - lo) / 12f64.sqrt();
     let mut sol = best;
@@ -668,10 +727,19 @@ fn fit_models(shots: &[ShotData], opts: &FitOptions) -> Vec<ModelFit> {
         wanted.contains(&Model::Single(r))
             || (wanted.contains(&Model::TwoRegime) && matches!(r, Regime::MuMu | Regime::SlipMu))
     };
-    for r in Regime::ALL {
-        if need_single(r) {
-            fits.push(fit_single(shots, r, opts));
-        }
+    // The single-regime candidates are independent: fit them in parallel.
+    {
+        use rayon::prelude::*;
+        let regimes: Vec<Regime> = Regime::ALL
+            .into_iter()
+            .filter(|r| need_single(*r))
+            .collect();
+        fits.extend(
+            regimes
+                .into_par_iter()
+                .map(|r| fit_single(shots, r, opts))
+                .collect::<Vec<_>>(),
+        );
     }
     if wanted.contains(&Model::TwoRegime) {
         let start = fits
@@ -680,7 +748,7 @@ fn fit_models(shots: &[ShotData], opts: &FitOptions) -> Vec<ModelFit> {
             .min_by(|a, b| a.sol.cost.total_cmp(&b.sol.cost))
             .map(|f| f.sol.clone());
         if let Some(s) = start
-            && let Some(f) = fit_two_regime(shots, &s, opts)
+            && let Some(f) = fit_two_regime(shots, s.state.g, &s.state.l, opts)
         {
             fits.push(f);
         }

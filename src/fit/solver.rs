@@ -18,8 +18,12 @@
 use super::problem::{GLOBAL_HI, GLOBAL_LO, LOCAL_HI, LOCAL_LO, NG, NL, NRES, ShotData, residuals};
 use crate::physics::Regime;
 use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
+use rayon::prelude::*;
 
 type Matrix4x3 = SMatrix<f64, 4, 3>;
+
+/// Shots from which the per-shot work runs on the rayon pool.
+const PAR_MIN: usize = 128;
 
 /// A problem instance: shots (possibly repeated, for the bootstrap), their regimes, free globals.
 pub struct Problem<'a> {
@@ -94,9 +98,16 @@ impl Problem<'_> {
 
     /// `(robust cost, chi²)` of a state.
     pub fn cost(&self, st: &State) -> (f64, f64) {
-        (0..self.shots.len())
-            .map(|i| self.shot_cost(i, &st.g, &st.l[i]))
-            .fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+        let one = |i: usize| self.shot_cost(i, &st.g, &st.l[i]);
+        let add = |a: (f64, f64), b: (f64, f64)| (a.0 + b.0, a.1 + b.1);
+        if self.shots.len() >= PAR_MIN {
+            (0..self.shots.len())
+                .into_par_iter()
+                .map(one)
+                .reduce(|| (0.0, 0.0), add)
+        } else {
+            (0..self.shots.len()).map(one).fold((0.0, 0.0), add)
+        }
     }
 
     /// Linearises shot `i`: weighted residuals, `A_i` (NRES×4) and `B_i` (NRES×3).
@@ -155,11 +166,10 @@ impl Problem<'_> {
 
     /// Normal-equation pieces at a state: `(U, eg, blocks)`.
     fn normal(&self, st: &State, active_set: bool) -> (Matrix4<f64>, Vector4<f64>, Vec<Block>) {
-        let mut u = Matrix4::zeros();
-        let mut eg = Vector4::zeros();
-        let mut blocks: Vec<Block> = Vec::with_capacity(self.shots.len());
-        for i in 0..self.shots.len() {
+        let per_shot = |i: usize| {
             let (r, a, b) = self.linearise(i, &st.g, &st.l[i]);
+            let mut u = Matrix4::zeros();
+            let mut eg = Vector4::zeros();
             let mut v = Matrix3::zeros();
             let mut w = Matrix4x3::zeros();
             let mut el = Vector3::zeros();
@@ -187,7 +197,23 @@ impl Problem<'_> {
                     v[(p, p)] = 1.0;
                 }
             }
-            blocks.push(Block { v, w, el });
+            (u, eg, Block { v, w, el })
+        };
+        let parts: Vec<(Matrix4<f64>, Vector4<f64>, Block)> = if self.shots.len() >= PAR_MIN {
+            (0..self.shots.len())
+                .into_par_iter()
+                .map(per_shot)
+                .collect()
+        } else {
+            (0..self.shots.len()).map(per_shot).collect()
+        };
+        let mut u = Matrix4::zeros();
+        let mut eg = Vector4::zeros();
+        let mut blocks: Vec<Block> = Vec::with_capacity(parts.len());
+        for (ui, ei, b) in parts {
+            u += ui;
+            eg += ei;
+            blocks.push(b);
         }
         // Active set: a global at a bound whose descent direction points out of the box is
         // held there for this step (plain projection would crawl along the bound).
