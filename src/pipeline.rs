@@ -683,7 +683,8 @@ fn reset_dir(dir: &Path, owner: &Path) -> anyhow::Result<()> {
 #[derive(Debug, Clone)]
 pub struct StageRecord {
     pub name: String,
-    pub cached: bool,
+    /// `ran`, `cached` or `failed`.
+    pub status: &'static str,
     pub seconds: f64,
     pub key: String,
     pub detail: String,
@@ -696,7 +697,8 @@ pub struct RunSummary {
     pub report_index: PathBuf,
     pub rows: Vec<ShotRow>,
     pub fits: Vec<FitSummary>,
-    pub fit_error: Option<String>,
+    /// Materials whose fit failed, with the reason (the report shows the others).
+    pub fit_failures: Vec<(String, String)>,
 }
 
 struct Runner {
@@ -725,7 +727,7 @@ impl Runner {
             eprintln!("[{idx}/{}] {name}: cached ({key})", self.n_stages);
             self.records.push(StageRecord {
                 name: name.into(),
-                cached: true,
+                status: "cached",
                 seconds: 0.0,
                 key,
                 detail: format!("made in {:.1} s earlier", st.seconds),
@@ -734,7 +736,19 @@ impl Runner {
         }
         eprintln!("[{idx}/{}] {name}: running ...", self.n_stages);
         let t0 = Instant::now();
-        let detail = work().with_context(|| format!("stage {name}"))?;
+        let detail = match work().with_context(|| format!("stage {name}")) {
+            Ok(d) => d,
+            Err(e) => {
+                self.records.push(StageRecord {
+                    name: name.into(),
+                    status: "failed",
+                    seconds: t0.elapsed().as_secs_f64(),
+                    key,
+                    detail: format!("{e:#}"),
+                });
+                return Err(e);
+            }
+        };
         let seconds = t0.elapsed().as_secs_f64();
         write_stamp(
             dir,
@@ -750,7 +764,7 @@ impl Runner {
         );
         self.records.push(StageRecord {
             name: name.into(),
-            cached: false,
+            status: "ran",
             seconds,
             key,
             detail,
@@ -892,7 +906,13 @@ pub fn run_pipeline(path: &Path, force: bool) -> Result<RunSummary, CliError> {
         );
     }
     let fit_key = key.hex();
+    let failures_file = fit_dir.join("fit_failures.json");
     let read_fit = |path: &Path| -> anyhow::Result<FitOutput> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
+    };
+    let read_failures = |path: &Path| -> anyhow::Result<Vec<(String, String)>> {
         let text =
             std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
@@ -902,29 +922,63 @@ pub fn run_pipeline(path: &Path, force: bool) -> Result<RunSummary, CliError> {
         &fit_dir,
         fit_key,
         // A fit file written by another version of the fit's types counts as missing.
-        || read_fit(&fit_file).is_ok(),
+        || read_fit(&fit_file).is_ok() && read_failures(&failures_file).is_ok(),
         || {
             reset_dir(&fit_dir, &p.work_dir)?;
-            let out = fit::fit_materials(&all_rows, &fit_options)?;
-            let json = fit::cli::to_json(&out)?;
-            report::write_atomic(&fit_file, json.as_bytes())?;
-            Ok(out
+            // One material at a time: a material without enough shots must not cost the others
+            // their fit.
+            let mut names: Vec<String> = Vec::new();
+            for r in &all_rows {
+                if !names.contains(&r.material) {
+                    names.push(r.material.clone());
+                }
+            }
+            let mut out = FitOutput {
+                fits: Vec::new(),
+                residuals: Vec::new(),
+            };
+            let mut failures: Vec<(String, String)> = Vec::new();
+            for m in &names {
+                let opts = FitOptions {
+                    material: Some(m.clone()),
+                    ..fit_options.clone()
+                };
+                match fit::fit_materials(&all_rows, &opts) {
+                    Ok(o) => {
+                        out.fits.extend(o.fits);
+                        out.residuals.extend(o.residuals);
+                    }
+                    Err(e) => failures.push((m.clone(), format!("{e:#}"))),
+                }
+            }
+            report::write_atomic(&fit_file, fit::cli::to_json(&out)?.as_bytes())?;
+            report::write_atomic(
+                &failures_file,
+                serde_json::to_string_pretty(&failures)?.as_bytes(),
+            )?;
+            let mut parts: Vec<String> = out
                 .fits
                 .iter()
                 .map(|f| format!("{} {} ({} shots)", f.material, f.model, f.n_used))
-                .collect::<Vec<_>>()
-                .join("; "))
+                .collect();
+            parts.extend(failures.iter().map(|(m, _)| format!("{m} FAILED")));
+            Ok(parts.join("; "))
         },
     );
-    let (fit_output, fit_error) = match fit_result.and_then(|()| read_fit(&fit_file)) {
-        Ok(out) => (Some(out), None),
+    let (fit_output, fit_failures) = match fit_result
+        .and_then(|()| Ok((read_fit(&fit_file)?, read_failures(&failures_file)?)))
+    {
+        Ok((out, failures)) => (Some(out), failures),
         Err(e) => {
             // The report still shows the extraction and the paper's curves.
             let msg = format!("{e:#}");
             eprintln!("fit failed: {msg}");
-            (None, Some(msg))
+            (None, vec![("all materials".to_string(), msg)])
         }
     };
+    for (m, e) in &fit_failures {
+        eprintln!("fit of {m} failed: {e}");
+    }
     let fits: Vec<FitSummary> = fit_output
         .as_ref()
         .map(|o| {
@@ -970,19 +1024,11 @@ pub fn run_pipeline(path: &Path, force: bool) -> Result<RunSummary, CliError> {
         .iter()
         .map(|r| StageInfo {
             name: r.name.clone(),
-            status: if r.cached {
-                "cached".into()
-            } else {
-                "ran".into()
-            },
+            status: r.status.to_string(),
             seconds: r.seconds,
             key: r.key.clone(),
         })
         .collect();
-    let mut fit_notes = Vec::new();
-    if let Some(e) = &fit_error {
-        fit_notes.push(format!("The fit failed: {e}"));
-    }
     let input = ReportInput {
         title: p.title.clone(),
         rows: all_rows.clone(),
@@ -997,7 +1043,8 @@ pub fn run_pipeline(path: &Path, force: bool) -> Result<RunSummary, CliError> {
         settings_name: path.display().to_string(),
         stages: stages_before,
         gallery_per_folder: p.report.gallery,
-        fit_settings: format!("{} ({})", p.fit.describe(), fit_notes.join(" ")),
+        fit_settings: p.fit.describe(),
+        fit_failures: fit_failures.clone(),
     };
     let report_dir = p.report_dir.clone();
     runner
@@ -1032,7 +1079,7 @@ pub fn run_pipeline(path: &Path, force: bool) -> Result<RunSummary, CliError> {
         report_index: index,
         rows: all_rows,
         fits,
-        fit_error,
+        fit_failures,
     })
 }
 
@@ -1059,10 +1106,7 @@ pub fn summary_text(s: &RunSummary) -> String {
     for r in &s.stages {
         out.push_str(&format!(
             "{:<26} {:<8} {:>7.1}  {}\n",
-            r.name,
-            if r.cached { "cached" } else { "ran" },
-            r.seconds,
-            r.detail
+            r.name, r.status, r.seconds, r.detail
         ));
     }
     let stats = report::ExtractionStats::of(&s.rows);
@@ -1070,8 +1114,8 @@ pub fn summary_text(s: &RunSummary) -> String {
         "\nimages: {} ({} ok, {} declined, {} error)\n",
         stats.total, stats.ok, stats.declined, stats.error
     ));
-    if let Some(e) = &s.fit_error {
-        out.push_str(&format!("fit: FAILED: {e}\n"));
+    for (m, e) in &s.fit_failures {
+        out.push_str(&format!("fit of {m}: FAILED: {e}\n"));
     }
     if !s.fits.is_empty() {
         out.push_str("\nmaterial    model        e               mu              mu0             mu'           shots\n");
@@ -1103,7 +1147,7 @@ pub fn run(args: &RunArgs) -> CliResult {
     let summary = run_pipeline(&args.pipeline, args.force)?;
     println!("{}", summary_text(&summary));
     let any_error = summary.rows.iter().any(|r| r.status == Status::Error);
-    Ok(if summary.fit_error.is_some() || any_error {
+    Ok(if !summary.fit_failures.is_empty() || any_error {
         Outcome::SomeFailed
     } else {
         Outcome::Ok

@@ -179,6 +179,14 @@ pub fn render_html(
     // Coefficients against Table 1.
     h.push_str("<h2 id=\"coefficients\">Coefficients against the paper's Table 1</h2>\n");
     h.push_str(&coefficient_table_html(input));
+    for (m, e) in &input.fit_failures {
+        let _ = writeln!(
+            h,
+            "<p class=\"error\">Fit of {}: failed: {}</p>",
+            esc(m),
+            esc(e)
+        );
+    }
 
     // Model selection.
     h.push_str("<h2 id=\"selection\">Model selection</h2>\n");
@@ -472,7 +480,11 @@ pub fn render_markdown(
     for row in coefficient_rows(input) {
         let _ = writeln!(m, "| {} |", row.join(" | "));
     }
-    m.push_str("\nFit values ± 1σ; paper: Table 1 (where it gives no μ0, μ0 = μ).\n\n## Model selection\n\n");
+    m.push_str("\nFit values ± 1σ; paper: Table 1 (where it gives no μ0, μ0 = μ).\n\n");
+    for (mat, e) in &input.fit_failures {
+        let _ = writeln!(m, "**Fit of {mat} failed:** {e}\n");
+    }
+    m.push_str("## Model selection\n\n");
     for f in input.fits.iter().filter(|f| !f.scores.is_empty()) {
         let _ = writeln!(
             m,

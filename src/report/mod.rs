@@ -112,8 +112,10 @@ pub struct ReportInput {
     pub stages: Vec<StageInfo>,
     /// Overlays shown per folder in the gallery.
     pub gallery_per_folder: usize,
-    /// One line on how the fit was run (and whether it failed).
+    /// One line on how the fit was run.
     pub fit_settings: String,
+    /// Materials whose fit failed, with the reason.
+    pub fit_failures: Vec<(String, String)>,
 }
 
 /// What was written.
