@@ -21,15 +21,18 @@ const COARSE_SIDE: usize = 600;
 pub struct Signal {
     pub w: usize,
     pub h: usize,
-    /// Full-resolution projected signal `u·I` (or `u·(I - plate)`); local baselines are
-    /// subtracted where it is used, so the cloth surface need not be evaluated at full resolution.
-    pub full: Vec<f32>,
+    /// Full-resolution RGB (minus the plate when there is one), interleaved; projections on a
+    /// ball's colour direction are taken where sampled, and local baselines are subtracted where
+    /// used, so the cloth surface need not be evaluated at full resolution.
+    pub rgb: Vec<f32>,
     /// Downsampling factor of the coarse grid.
     pub f: usize,
     pub cw: usize,
     pub ch: usize,
     /// Coarse background-subtracted signal `u·(C - B)`.
     pub coarse: Vec<f32>,
+    /// Coarse background-subtracted colour difference `C - B` per channel.
+    pub coarse_diff: Vec<[f32; 3]>,
     /// Robust (MAD) noise of `coarse`.
     pub sigma_coarse: f32,
     /// Unit ball-minus-cloth colour direction.
@@ -39,9 +42,15 @@ pub struct Signal {
 }
 
 impl Signal {
-    /// Bilinear sample of the full-resolution signal; `None` outside the image.
+    /// Bilinear sample of the full-resolution signal projected on `self.u`; `None` outside.
     #[inline]
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
+        self.sample_u(x, y, self.u)
+    }
+
+    /// Bilinear sample of the full-resolution signal projected on colour direction `u`.
+    #[inline]
+    pub fn sample_u(&self, x: f64, y: f64, u: [f32; 3]) -> Option<f32> {
         if !(x >= 0.0 && y >= 0.0) {
             return None;
         }
@@ -50,9 +59,13 @@ impl Signal {
             return None;
         }
         let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+        let v = |i: usize| {
+            let k = 3 * i;
+            u[0] * self.rgb[k] + u[1] * self.rgb[k + 1] + u[2] * self.rgb[k + 2]
+        };
         let i = y0 * self.w + x0;
-        let a = self.full[i] + fx * (self.full[i + 1] - self.full[i]);
-        let b = self.full[i + self.w] + fx * (self.full[i + self.w + 1] - self.full[i + self.w]);
+        let a = v(i) + fx * (v(i + 1) - v(i));
+        let b = v(i + self.w) + fx * (v(i + self.w + 1) - v(i + self.w));
         Some(a + fy * (b - a))
     }
 
@@ -289,14 +302,10 @@ pub fn build(img: &RgbImage, plate: Option<&RgbImage>) -> Result<Signal, String>
         .map(|d| u[0] * d[0] + u[1] * d[1] + u[2] * d[2])
         .collect();
     let sigma_coarse = mad_sigma(&coarse).max(1e-6);
-    let mut full: Vec<f32> = img
-        .data
-        .chunks_exact(3)
-        .map(|p| u[0] * p[0] + u[1] * p[1] + u[2] * p[2])
-        .collect();
+    let mut rgb = img.data.clone();
     if let Some(p) = plate {
-        for (v, q) in full.iter_mut().zip(p.data.chunks_exact(3)) {
-            *v -= u[0] * q[0] + u[1] * q[1] + u[2] * q[2];
+        for (v, q) in rgb.iter_mut().zip(&p.data) {
+            *v -= q;
         }
     }
     let mut bl: Vec<f32> = bg
@@ -311,11 +320,12 @@ pub fn build(img: &RgbImage, plate: Option<&RgbImage>) -> Result<Signal, String>
     Ok(Signal {
         w: img.w,
         h: img.h,
-        full,
+        rgb,
         f,
         cw,
         ch,
         coarse,
+        coarse_diff: diff,
         sigma_coarse,
         u,
         cloth_level,

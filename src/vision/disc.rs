@@ -1,6 +1,7 @@
 //! The object ball's waiting disc: centre `O` and radius `R`.
 //!
-//! Coarse: the brightest blob of the smoothed coarse signal, cut at half its plateau level.
+//! Coarse: the brightest blob of the smoothed coarse signal, cut at half its plateau level; the
+//! disc is its largest inscribed circle (a slow ball's smear or a second resting ball may touch it).
 //! Fine: along `N` rays from the coarse centre the full-resolution profile is sampled every
 //! 0.5 px; the edge is the position of steepest descent (sub-pixel by a parabola through the
 //! smoothed derivative), which is the silhouette radius for a sharp disc whatever its shading.
@@ -75,7 +76,7 @@ pub fn find_coarse(sig: &Signal) -> Result<CoarseDisc, String> {
         .enumerate()
         .max_by(|a, b| a.1.total_cmp(b.1))
         .ok_or("empty image")?;
-    if m < 10.0 * sig.sigma_coarse {
+    if m < 6.0 * sig.sigma_coarse {
         return Err(format!(
             "no ball disc found (brightest spot is {:.1} σ above the cloth)",
             m / sig.sigma_coarse
@@ -84,11 +85,62 @@ pub fn find_coarse(sig: &Signal) -> Result<CoarseDisc, String> {
     let r0 = flood(w, h, imax, |j| s[j] > 0.3 * m);
     let mut vals: Vec<f32> = r0.iter().map(|&j| s[j]).collect();
     let plateau = median(&mut vals);
-    let region = flood(w, h, imax, |j| s[j] > 0.5 * plateau);
-    let n = region.len() as f64;
-    if n < 3.0 {
+    let blob = flood(w, h, imax, |j| s[j] > 0.5 * plateau);
+    if blob.len() < 3 {
         return Err("no ball disc found (bright spot smaller than a few pixels)".into());
     }
+    // The blob may carry a slow ball's bright smear or a second ball at rest: the disc is the
+    // largest inscribed circle (maximum of the chamfer distance to the blob's outside); only
+    // blob pixels within 1.2 of that radius from its centre are kept.
+    let (bx0, bx1) = blob
+        .iter()
+        .fold((usize::MAX, 0), |a, &j| (a.0.min(j % w), a.1.max(j % w)));
+    let (by0, by1) = blob
+        .iter()
+        .fold((usize::MAX, 0), |a, &j| (a.0.min(j / w), a.1.max(j / w)));
+    let (bw, bh) = (bx1 - bx0 + 3, by1 - by0 + 3);
+    let big = 1e9f64;
+    let mut dist = vec![0f64; bw * bh];
+    for &j in &blob {
+        dist[(j / w - by0 + 1) * bw + (j % w - bx0 + 1)] = big;
+    }
+    for y in 1..bh - 1 {
+        for x in 1..bw - 1 {
+            let i = y * bw + x;
+            if dist[i] > 0.0 {
+                let v = (dist[i - 1] + 1.0)
+                    .min(dist[i - bw] + 1.0)
+                    .min(dist[i - bw - 1] + std::f64::consts::SQRT_2)
+                    .min(dist[i - bw + 1] + std::f64::consts::SQRT_2);
+                dist[i] = dist[i].min(v);
+            }
+        }
+    }
+    for y in (1..bh - 1).rev() {
+        for x in (1..bw - 1).rev() {
+            let i = y * bw + x;
+            if dist[i] > 0.0 {
+                let v = (dist[i + 1] + 1.0)
+                    .min(dist[i + bw] + 1.0)
+                    .min(dist[i + bw + 1] + std::f64::consts::SQRT_2)
+                    .min(dist[i + bw - 1] + std::f64::consts::SQRT_2);
+                dist[i] = dist[i].min(v);
+            }
+        }
+    }
+    let (imx, dmax) = dist
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .map(|(i, d)| (i, *d))
+        .unwrap_or((0, 0.0));
+    let (icx, icy) = ((imx % bw + bx0) as f64 - 1.0, (imx / bw + by0) as f64 - 1.0);
+    let keep_r = 1.2 * (dmax + 0.5);
+    let region: Vec<usize> = blob
+        .into_iter()
+        .filter(|&j| ((j % w) as f64 - icx).hypot((j / w) as f64 - icy) <= keep_r)
+        .collect();
+    let n = region.len() as f64;
     let (mut sx, mut sy) = (0.0, 0.0);
     for &j in &region {
         sx += (j % w) as f64;

@@ -355,18 +355,6 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         Ok(c) => c,
         Err(e) => return Analysis::declined(Status::Declined, e),
     };
-    if cd.elongation > 2.0 {
-        let mut a = Analysis::declined(
-            Status::Declined,
-            format!(
-                "two touching discs (elongation {:.1}): a ball stopped at the impact next to the \
-                 object ball; not measured",
-                cd.elongation
-            ),
-        );
-        a.ball_radius_px = Some(cd.r);
-        return a;
-    }
     let dsc = match disc::refine(&sig, &cd) {
         Ok(d) => d,
         Err(e) => return Analysis::declined(Status::Declined, e),
@@ -382,11 +370,11 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         radius: 1.25 * r,
     };
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
-    let mut tracks: Vec<Vec<Sample>> = cands
+    let tracked: Vec<(Vec<Sample>, [f32; 3])> = cands
         .iter()
         .take(4)
         .map(|c| {
-            let t = streak::track(&sig, c.seed, c.dir, r, ko);
+            let t = streak::track(&sig, c.seed, c.dir, r, ko, c.u);
             if debug {
                 eprintln!(
                     "candidate seed=({:.0},{:.0}) dir=({:.3},{:.3}) weight={:.3} samples={} u={:?}",
@@ -399,10 +387,12 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
                     sig.u
                 );
             }
-            t
+            (t, c.u)
         })
-        .filter(|t| t.len() >= 5)
+        .filter(|t| t.0.len() >= 5)
         .collect();
+    let track_u: Vec<[f32; 3]> = tracked.iter().map(|t| t.1).collect();
+    let mut tracks: Vec<Vec<Sample>> = tracked.into_iter().map(|t| t.0).collect();
     // Two candidates can track the same streak (inner and outer ring): keep the longer.
     let mut dup = vec![false; tracks.len()];
     for a in 0..tracks.len() {
@@ -432,6 +422,12 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         k += 1;
         !dup[k - 1]
     });
+    let track_u: Vec<[f32; 3]> = track_u
+        .into_iter()
+        .zip(&dup)
+        .filter(|(_, d)| !**d)
+        .map(|(u, _)| u)
+        .collect();
     // Drop samples whose profile window reaches into another streak (near the impact, crossings);
     // this first cut only serves the scene reading, the fit uses re-measured samples below.
     let clean: Vec<Vec<Sample>> = (0..tracks.len())
@@ -460,14 +456,17 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
                 .collect()
         })
         .collect();
-    let mut pairs: Vec<(Vec<Sample>, Vec<Sample>)> = tracks
+    let mut pairs: Vec<(Vec<Sample>, Vec<Sample>, [f32; 3])> = tracks
         .drain(..)
         .zip(clean)
-        .filter(|(_, c)| c.len() >= 5)
+        .zip(track_u)
+        .map(|((t, c), u)| (t, c, u))
+        .filter(|(_, c, _)| c.len() >= 5)
         .collect();
-    pairs.sort_by_key(|(_, c)| std::cmp::Reverse(c.len()));
+    pairs.sort_by_key(|(_, c, _)| std::cmp::Reverse(c.len()));
     pairs.truncate(3);
     let raw: Vec<Vec<Sample>> = pairs.iter().map(|p| p.0.clone()).collect();
+    let colours: Vec<[f32; 3]> = pairs.iter().map(|p| p.2).collect();
     let kept: Vec<Vec<Sample>> = pairs.into_iter().map(|p| p.1).collect();
     out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
     let cue_stopped = match kept.len() {
@@ -542,7 +541,7 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
             pts.extend(kept[b].iter().map(|q| (q.x, q.y)));
             ex.add_band(&pts, 1.1 * r + 1.5, r);
         }
-        let m = streak::remeasure(&sig, &raw[a], start_of(a), r, &ex);
+        let m = streak::remeasure(&sig, &raw[a], start_of(a), r, &ex, colours[a]);
         if m.len() >= 5 {
             measured[a] = m;
         }

@@ -22,6 +22,8 @@ pub struct CoarseStreak {
     pub dir: (f64, f64),
     /// Total signal of the part (for ranking).
     pub weight: f64,
+    /// Unit colour direction of this ball's light (ball minus cloth).
+    pub u: [f32; 3],
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -46,9 +48,31 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
     let f = sig.f as f64;
     let rc = r / f;
     let rb = ((rc / 2.0).round() as usize).max(1);
-    let s = box_blur(&sig.coarse, w, h, rb);
-    let sigma = mad_sigma(&s).max(1e-7);
-    let thr = 4.0 * sigma;
+    // Detection works on every ball colour: the noise-whitened norm of the smoothed colour
+    // difference (a white cue ball and a red object ball can project to nothing on one
+    // direction). Its cloth level is a positive constant, removed by the ring's own median.
+    let chans: Vec<Vec<f32>> = (0..3)
+        .map(|c| {
+            let v: Vec<f32> = sig.coarse_diff.iter().map(|d| d[c]).collect();
+            box_blur(&v, w, h, rb)
+        })
+        .collect();
+    let sc: Vec<f32> = chans.iter().map(|v| mad_sigma(v).max(1e-7)).collect();
+    let s: Vec<f32> = (0..w * h)
+        .map(|i| ((0..3).map(|c| (chans[c][i] / sc[c]).powi(2)).sum::<f32>()).sqrt())
+        .collect();
+    let thr = {
+        let mut t = s.clone();
+        let m = super::background::median(&mut t);
+        m + 4.0 * mad_sigma(&s).max(1e-7)
+    };
+    let colour_at = |x: f64, y: f64| -> [f64; 3] {
+        let (xi, yi) = (
+            x.round().clamp(0.0, (w - 1) as f64) as usize,
+            y.round().clamp(0.0, (h - 1) as f64) as usize,
+        );
+        [0, 1, 2].map(|c| chans[c][yi * w + xi] as f64)
+    };
     let (ocx, ocy) = (ox / f - 0.5, oy / f - 0.5);
     let at = |x: f64, y: f64| -> Option<f32> {
         if x < 0.0 || y < 0.0 {
@@ -75,7 +99,13 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
                 *v = acc / n as f32;
             }
         }
-        let above: Vec<bool> = val.iter().map(|v| v.is_finite() && *v > thr).collect();
+        // Ring averages are much less noisy than single smoothed pixels: threshold them against
+        // their own robust spread around the ring (most of the ring is cloth).
+        let finite: Vec<f32> = val.iter().copied().filter(|v| v.is_finite()).collect();
+        let mut tmp = finite.clone();
+        let med = super::background::median(&mut tmp);
+        let thr_ring = (med + 5.0 * mad_sigma(&finite)).min(thr).max(med + 1e-7);
+        let above: Vec<bool> = val.iter().map(|v| v.is_finite() && *v > thr_ring).collect();
         if above.iter().all(|b| *b) || !above.iter().any(|b| *b) {
             return Vec::new();
         }
@@ -119,7 +149,7 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
                 if da < -std::f64::consts::PI {
                     da += std::f64::consts::TAU;
                 }
-                let wgt = (val[k] - thr).max(0.0) as f64;
+                let wgt = (val[k] - thr_ring).max(0.0) as f64;
                 sw += wgt;
                 sa += wgt * da;
             }
@@ -128,6 +158,22 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
             }
             let phi = a0 + sa / sw;
             let seed = (ocx + rho * phi.cos(), ocy + rho * phi.sin());
+            // The streak's own colour direction (ball minus cloth) at its crossing.
+            let mut col = [0f64; 3];
+            for &k in &piece {
+                let a = std::f64::consts::TAU * k as f64 / n_ang as f64;
+                let wgt = (val[k] - thr_ring).max(0.0) as f64;
+                let cc = colour_at(ocx + rho * a.cos(), ocy + rho * a.sin());
+                for c in 0..3 {
+                    col[c] += wgt * cc[c];
+                }
+            }
+            let cn = (col[0] * col[0] + col[1] * col[1] + col[2] * col[2]).sqrt();
+            let u = if cn > 0.0 {
+                col.map(|v| (v / cn) as f32)
+            } else {
+                sig.u
+            };
             // Local principal axis.
             let rad = 3.0 * rc;
             let (x0, x1) = (
@@ -182,6 +228,7 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
                     seed: ((seed.0 + 0.5) * f, (seed.1 + 0.5) * f),
                     dir: d,
                     weight: sw,
+                    u,
                 },
             ));
         }
@@ -193,7 +240,7 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
     found.retain(|(_, c)| c.weight >= 0.05 * wmax);
     // A short streak (a slow object ball in a grazing shot) may end before the outer ring; an
     // inner ring at 2R adds crossings in new directions (duplicates are removed after tracking).
-    if found.len() < 3 {
+    {
         let inner = scan(2.0 * rc);
         for (phi, c) in inner.into_iter().filter(|(_, c)| c.weight >= 0.05 * wmax) {
             let new = found.iter().all(|(p, _)| {
@@ -229,6 +276,7 @@ pub fn profile_centre(
     r: f64,
     step: f64,
     excl: Option<&Exclusion>,
+    u: [f32; 3],
 ) -> Option<ProfileCentre> {
     let n = (-d.1, d.0);
     let half = (1.7 * r).ceil() as i64;
@@ -243,7 +291,7 @@ pub fn profile_centre(
             let a = (j as f64 + 0.5) / n_a as f64 * step - step / 2.0;
             let x = p.0 + a * d.0 + tk * n.0;
             let y = p.1 + a * d.1 + tk * n.1;
-            match sig.sample(x, y) {
+            match sig.sample_u(x, y, u) {
                 Some(v) => acc += v,
                 None => {
                     inside = false;
@@ -374,10 +422,11 @@ pub fn track(
     dir: (f64, f64),
     r: f64,
     keep_out: KeepOut,
+    u: [f32; 3],
 ) -> Vec<Sample> {
     let step = (r / 10.0).max(2.0);
-    let outward = walk(sig, seed, dir, r, step, keep_out);
-    let inward = walk(sig, seed, (-dir.0, -dir.1), r, step, keep_out);
+    let outward = walk(sig, seed, dir, r, step, keep_out, u);
+    let inward = walk(sig, seed, (-dir.0, -dir.1), r, step, keep_out, u);
     let mut all: Vec<Sample> = inward.into_iter().skip(1).rev().collect();
     all.extend(outward);
     all
@@ -390,6 +439,7 @@ fn walk(
     r: f64,
     step: f64,
     ko: KeepOut,
+    u: [f32; 3],
 ) -> Vec<Sample> {
     let mut out: Vec<Sample> = Vec::new();
     let mut p = seed;
@@ -411,7 +461,7 @@ fn walk(
         if closest < ko.radius {
             break;
         }
-        let Some(pc) = profile_centre(sig, p, d, r, step, None) else {
+        let Some(pc) = profile_centre(sig, p, d, r, step, None, u) else {
             break;
         };
         let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
@@ -517,6 +567,7 @@ pub fn remeasure(
     start: (f64, f64),
     r: f64,
     excl: &Exclusion,
+    u: [f32; 3],
 ) -> Vec<Sample> {
     let step = (r / 10.0).max(2.0);
     let n = samples.len();
@@ -536,7 +587,7 @@ pub fn remeasure(
         let dist0 = (samples[0].x - start.0).hypot(samples[0].y - start.1);
         let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
         for _ in 0..((dist0 / step) as usize) {
-            let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl)) else {
+            let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl), u) else {
                 if debug {
                     eprintln!(
                         "extension stops at ({:.0},{:.0}): profile rejected",
@@ -571,7 +622,7 @@ pub fn remeasure(
     for i in 0..n {
         let d = dir_at(i);
         let p = (samples[i].x, samples[i].y);
-        if let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl)) {
+        if let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl), u) {
             let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
             if snr >= 5.0 && pc.c.abs() < 0.3 * r {
                 out.push(Sample {
