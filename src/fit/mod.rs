@@ -545,12 +545,85 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
             best = Some(sol);
         }
     }
+    let mut best = best.expect("grid gives at least one start");
+    // Estimated spin: the per-shot likelihood in (r, s) can have several minima (a draw shot
+    // started as rolling); re-seed each shot from a grid at the current globals and refit.
+    if shots.iter().any(|s| s.estimate_spin) {
+        for _ in 0..2 {
+            let st = reseed_spin(&p, &best.state);
+            let sol = p.solve(st, MAX_ITER);
+            if sol.cost < best.cost - 1e-9 {
+                best = sol;
+            } else {
+                break;
+            }
+        }
+    }
     ModelFit {
         model,
         regimes,
-        sol: best.expect("grid gives at least one start"),
+        sol: best,
         threshold: None,
     }
+}
+
+/// Grid of spin `r` for re-seeding: `[-2, 3]` in steps of 0.1; English `s`: `[-1, 1]`, 0.1.
+fn spin_grid() -> impl Iterator<Item = (f64, f64)> {
+    (0..=50).flat_map(|a| (0..=20).map(move |b| (-2.0 + 0.1 * a as f64, -1.0 + 0.1 * b as f64)))
+}
+
+/// Each estimated-spin shot moved to its best `(r, s)` grid point if that beats its current
+/// locals (globals and psi held).
+fn reseed_spin(p: &Problem, st: &State) -> State {
+    use rayon::prelude::*;
+    let l: Vec<[f64; NL]> = (0..p.shots.len())
+        .into_par_iter()
+        .map(|i| {
+            let cur = st.l[i];
+            if !p.shots[i].estimate_spin {
+                return cur;
+            }
+            let mut best = (p.shot_cost(i, &st.g, &cur).0, cur);
+            for (r, s) in spin_grid() {
+                let l = [cur[0], r, s];
+                let c = p.shot_cost(i, &st.g, &l).0;
+                if c < best.0 {
+                    best = (c, l);
+                }
+            }
+            best.1
+        })
+        .collect();
+    State { g: st.g, l }
+}
+
+/// Profile-based 1-sigma of a shot's `(r, s)`: half of the extent (padded by half a grid step)
+/// of the region with `Δchi² ≤ 4` around the fit, divided by two, on a grid of
+/// `r̂ ± 1.5` (step 0.1) by `s ∈ [-1, 1]` (step 0.1) with the globals and psi held. It catches
+/// the non-quadratic, multi-modal likelihood of weakly determined English, where the
+/// curvature at the optimum understates the error.
+fn spin_profile_errors(p: &Problem, g: &[f64; NG], i: usize, l: &[f64; NL]) -> (f64, f64) {
+    let c0 = p.shot_cost(i, g, l).0;
+    let (mut rlo, mut rhi, mut slo, mut shi) = (l[1], l[1], l[2], l[2]);
+    let mut cmin = c0;
+    let mut pts = Vec::with_capacity(31 * 21);
+    for a in 0..=30 {
+        for b in 0..=20 {
+            let (r, s) = (l[1] - 1.5 + 0.1 * a as f64, -1.0 + 0.1 * b as f64);
+            let c = p.shot_cost(i, g, &[l[0], r, s]).0;
+            cmin = cmin.min(c);
+            pts.push((r, s, c));
+        }
+    }
+    for (r, s, c) in pts {
+        if c - cmin <= 4.0 {
+            rlo = rlo.min(r - 0.05);
+            rhi = rhi.max(r + 0.05);
+            slo = slo.min(s - 0.05);
+            shi = shi.max(s + 0.05);
+        }
+    }
+    ((rhi - rlo) / 4.0, (shi - slo) / 4.0)
 }
 
 /// Two-regime model: profile chi² over the stick/slip partition ordered by each shot's critical
@@ -1061,6 +1134,7 @@ fn summarise(
     };
     // Per-shot residuals.
     let coeff = problem::coefficients(&g);
+    let prob = problem(shots, f.regimes.clone(), f.model, opts);
     let mut res_rows = Vec::new();
     let mut resid: [Vec<f64>; 5] = Default::default();
     let (mut n_known, mut n_est, mut n_undet) = (0, 0, 0);
@@ -1084,8 +1158,9 @@ fn summarise(
         let var = f.sol.local_var[i];
         let (spin_source, spin_est, spin_err, english_est, english_err, spin_reason) =
             if s.estimate_spin {
-                let r_se = var[1].sqrt() * scale;
-                let s_se = var[2].sqrt() * scale;
+                let (r_prof, s_prof) = spin_profile_errors(&prob, &g, i, &l);
+                let r_se = (var[1].sqrt() * scale).max(r_prof);
+                let s_se = (var[2].sqrt() * scale).max(s_prof);
                 // Undetermined: the data barely narrowed the wide prior.
                 let r_ok = r_se.is_finite() && r_se < 0.5 * SPIN_PRIOR_SIGMA;
                 let s_ok = s_se.is_finite() && s_se < 0.5 * ENGLISH_PRIOR_SIGMA;
@@ -1191,7 +1266,6 @@ fn summarise(
         });
     }
     let sc = score(f, shots);
-    let _ = opts;
     let fit = MaterialFit {
         material: material.to_string(),
         model: f.model.name().to_string(),

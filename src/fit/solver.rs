@@ -81,7 +81,8 @@ struct Block {
 }
 
 impl Problem<'_> {
-    fn shot_cost(&self, i: usize, g: &[f64; NG], l: &[f64; NL]) -> (f64, f64) {
+    /// `(robust cost, chi²)` of shot `i` alone.
+    pub fn shot_cost(&self, i: usize, g: &[f64; NG], l: &[f64; NL]) -> (f64, f64) {
         let r = residuals(self.shots[i], g, l, self.regimes[i]);
         let mut cost = 0.0;
         let mut chi2 = 0.0;
