@@ -225,7 +225,7 @@ pub fn fig09(m: &MaterialFigures) -> Figure {
                 }
                 // Break the curve at the asymptote of tan (a direction through ±90°).
                 let d = a[idx]?;
-                if d.abs() > 88.0 {
+                if d.abs() > 89.0 {
                     return None;
                 }
                 Some((psi.to_radians().tan(), d.to_radians().tan()))
@@ -285,7 +285,9 @@ pub fn fig09(m: &MaterialFigures) -> Figure {
         format!("{}_fig09_tan", m.name),
         format!(
             "Fig. 9 style, {}: tan δ₁ (a) and tan θ₁ (b) against tan ψ ({}). Solid: fitted \
-             coefficients; dashed: the paper's Table 1; the regime sequence along ψ is in brackets.",
+             coefficients; dashed: the paper's Table 1; the regime sequence along ψ is in brackets. \
+             Directions within 1° of 90° have no finite tangent on this scale and are left out \
+             (Fig. 10 shows every shot).",
             m.label,
             m.spin_text()
         ),
@@ -323,23 +325,6 @@ pub fn fig10(m: &MaterialFigures) -> Figure {
                 .with_samples(sw.samples(f)),
             );
         }
-        if let Some(model) = &m.paper {
-            // Paper's coefficients in black (dashed μ–μ), as in every figure; s–μ dotted.
-            for (reg, dash, color) in [
-                (Regime::MuMu, Dash::Dashed, BLACK),
-                (Regime::SlipMu, Dash::Dotted, regime_color(Regime::SlipMu)),
-            ] {
-                let sw = m.sweep(model, RegimeChoice::Fixed(reg));
-                let mut line = Line::new(
-                    format!("{} {}", model.label, theory::pretty_regime(reg)),
-                    color,
-                    dash,
-                )
-                .with_samples(sw.samples(f));
-                line.width = 2;
-                p.lines.push(line);
-            }
-        }
         p.points.push(m.points(
             &format!("measured ({} shots)", m.n_measured()),
             if idx == DELTA1 {
@@ -364,7 +349,34 @@ pub fn fig10(m: &MaterialFigures) -> Figure {
                 Some(dp(psi, r.psi_err_deg, y, ye))
             },
         ));
-        panels.push(p.auto_y(10.0));
+        // The axis follows the data, the fitted curve and the paper's auto-regime curve; a forced
+        // regime far from them (μ–μ with rubber's friction below psi_L) may leave the window.
+        let mut sizing = p.clone();
+        if let Some(model) = &m.paper {
+            let sw = m.sweep(model, RegimeChoice::Auto);
+            sizing
+                .lines
+                .push(Line::new("", BLACK, Dash::Solid).with_samples(sw.samples(f)));
+        }
+        let mut p = p.ranges((0.0, 90.0), sizing.auto_y(10.0).y_range);
+        if let Some(model) = &m.paper {
+            // Paper's coefficients in black (dashed μ–μ), as in every figure; s–μ dotted.
+            for (reg, dash, color) in [
+                (Regime::MuMu, Dash::Dashed, BLACK),
+                (Regime::SlipMu, Dash::Dotted, regime_color(Regime::SlipMu)),
+            ] {
+                let sw = m.sweep(model, RegimeChoice::Fixed(reg));
+                let mut line = Line::new(
+                    format!("{} {}", model.label, theory::pretty_regime(reg)),
+                    color,
+                    dash,
+                )
+                .with_samples(sw.samples(f));
+                line.width = 2;
+                p.lines.push(line);
+            }
+        }
+        panels.push(p);
     }
     let paper = m
         .paper

@@ -493,7 +493,7 @@ fn draw_panel<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> D
     }
 
     let legend = if p.legend == LegendAt::Auto {
-        emptiest_corner(p)
+        emptiest_corner(p, chart.plotting_area().dim_in_pixel())
     } else {
         p.legend
     };
@@ -526,22 +526,33 @@ fn draw_panel<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> D
 
 /// The corner of the plotting window (a box of 45 % × 40 % of it) that holds the fewest curve
 /// samples and measured points, weighting points (with error bars) heavier than curves.
-fn emptiest_corner(p: &Panel) -> LegendAt {
+fn emptiest_corner(p: &Panel, plot_px: (u32, u32)) -> LegendAt {
     let ((x0, x1), (y0, y1)) = (p.x_range, p.y_range);
     let (w, h) = (x1 - x0, y1 - y0);
+    // The legend's size in pixels (15 px font: about 20 px per entry, 8 px per character plus
+    // the sample and margins), as fractions of the plotting area.
+    let labels: Vec<&str> = p
+        .lines
+        .iter()
+        .filter(|l| !l.is_empty())
+        .filter_map(|l| l.label.as_deref())
+        .chain(
+            p.points
+                .iter()
+                .filter(|s| !s.points.is_empty())
+                .filter_map(|s| s.label.as_deref()),
+        )
+        .chain(p.cells.legend.iter().map(|(l, _)| l.as_str()))
+        .collect();
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    let (pw, ph) = (plot_px.0.max(1) as f64, plot_px.1.max(1) as f64);
+    let fw = ((8.0 * longest as f64 + 70.0) / pw).clamp(0.15, 0.95);
+    let fh = ((20.0 * labels.len() as f64 + 24.0) / ph).clamp(0.1, 0.95);
     let corners = [
-        (LegendAt::UpperLeft, (x0, x0 + 0.45 * w), (y1 - 0.4 * h, y1)),
-        (
-            LegendAt::UpperRight,
-            (x1 - 0.45 * w, x1),
-            (y1 - 0.4 * h, y1),
-        ),
-        (
-            LegendAt::LowerRight,
-            (x1 - 0.45 * w, x1),
-            (y0, y0 + 0.4 * h),
-        ),
-        (LegendAt::LowerLeft, (x0, x0 + 0.45 * w), (y0, y0 + 0.4 * h)),
+        (LegendAt::UpperLeft, (x0, x0 + fw * w), (y1 - fh * h, y1)),
+        (LegendAt::UpperRight, (x1 - fw * w, x1), (y1 - fh * h, y1)),
+        (LegendAt::LowerRight, (x1 - fw * w, x1), (y0, y0 + fh * h)),
+        (LegendAt::LowerLeft, (x0, x0 + fw * w), (y0, y0 + fh * h)),
     ];
     let mut best = (LegendAt::UpperLeft, f64::INFINITY);
     for (corner, (a, b), (c, d)) in corners {
@@ -549,10 +560,13 @@ fn emptiest_corner(p: &Panel) -> LegendAt {
         let mut score = 0.0;
         for l in &p.lines {
             for seg in &l.segments {
-                // Densify so that a long straight segment counts where it runs.
+                // Sample every 1 % of the window along each piece, so that a long straight
+                // piece counts wherever it runs.
                 for win in seg.windows(2) {
-                    for k in 0..8 {
-                        let t = k as f64 / 8.0;
+                    let len = ((win[1].0 - win[0].0) / w).hypot((win[1].1 - win[0].1) / h);
+                    let n = ((len / 0.01).ceil() as usize).clamp(1, 400);
+                    for k in 0..n {
+                        let t = k as f64 / n as f64;
                         let (x, y) = (
                             win[0].0 + t * (win[1].0 - win[0].0),
                             win[0].1 + t * (win[1].1 - win[0].1),
