@@ -567,9 +567,10 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
     }
 }
 
-/// Grid of spin `r` for re-seeding: `[-2, 3]` in steps of 0.1; English `s`: `[-1, 1]`, 0.1.
+/// Grid of spin `r` for re-seeding: `[-2, 3]` in steps of 0.25; English `s`: `[-1, 1]`, 0.2
+/// (the least squares refines from there).
 fn spin_grid() -> impl Iterator<Item = (f64, f64)> {
-    (0..=50).flat_map(|a| (0..=20).map(move |b| (-2.0 + 0.1 * a as f64, -1.0 + 0.1 * b as f64)))
+    (0..=20).flat_map(|a| (0..=10).map(move |b| (-2.0 + 0.25 * a as f64, -1.0 + 0.2 * b as f64)))
 }
 
 /// Each estimated-spin shot moved to its best `(r, s)` grid point if that beats its current
@@ -597,19 +598,19 @@ fn reseed_spin(p: &Problem, st: &State) -> State {
     State { g: st.g, l }
 }
 
-/// Profile-based 1-sigma of a shot's `(r, s)`: half of the extent (padded by half a grid step)
-/// of the region with `Δchi² ≤ 4` around the fit, divided by two, on a grid of
-/// `r̂ ± 1.5` (step 0.1) by `s ∈ [-1, 1]` (step 0.1) with the globals and psi held. It catches
-/// the non-quadratic, multi-modal likelihood of weakly determined English, where the
-/// curvature at the optimum understates the error.
+/// Profile-based 1-sigma of a shot's `(r, s)`: a quarter of the extent (padded by half a grid
+/// step) of the region with `Δchi² ≤ 4`, on a grid of `r̂ ± 1.5` (step 0.15) by
+/// `s ∈ [-1, 1]` (step 0.2) with the globals and psi held. It catches the non-quadratic,
+/// multi-modal likelihood of weakly determined English, where the curvature at the optimum
+/// understates the error.
 fn spin_profile_errors(p: &Problem, g: &[f64; NG], i: usize, l: &[f64; NL]) -> (f64, f64) {
     let c0 = p.shot_cost(i, g, l).0;
     let (mut rlo, mut rhi, mut slo, mut shi) = (l[1], l[1], l[2], l[2]);
     let mut cmin = c0;
-    let mut pts = Vec::with_capacity(31 * 21);
-    for a in 0..=30 {
-        for b in 0..=20 {
-            let (r, s) = (l[1] - 1.5 + 0.1 * a as f64, -1.0 + 0.1 * b as f64);
+    let mut pts = Vec::with_capacity(21 * 11);
+    for a in 0..=20 {
+        for b in 0..=10 {
+            let (r, s) = (l[1] - 1.5 + 0.15 * a as f64, -1.0 + 0.2 * b as f64);
             let c = p.shot_cost(i, g, &[l[0], r, s]).0;
             cmin = cmin.min(c);
             pts.push((r, s, c));
@@ -617,10 +618,10 @@ fn spin_profile_errors(p: &Problem, g: &[f64; NG], i: usize, l: &[f64; NL]) -> (
     }
     for (r, s, c) in pts {
         if c - cmin <= 4.0 {
-            rlo = rlo.min(r - 0.05);
-            rhi = rhi.max(r + 0.05);
-            slo = slo.min(s - 0.05);
-            shi = shi.max(s + 0.05);
+            rlo = rlo.min(r - 0.075);
+            rhi = rhi.max(r + 0.075);
+            slo = slo.min(s - 0.1);
+            shi = shi.max(s + 0.1);
         }
     }
     ((rhi - rlo) / 4.0, (shi - slo) / 4.0)
@@ -628,11 +629,11 @@ fn spin_profile_errors(p: &Problem, g: &[f64; NG], i: usize, l: &[f64; NL]) -> (
 
 /// Two-regime model: profile chi² over the stick/slip partition ordered by each shot's critical
 /// `mu0` (see [`critical_mu_static`]), warm-started from `(g0, l0)` (the better single-regime
-/// fit). Up to 60 shots every threshold is fitted. With more shots the globals come from the
-/// exhaustive profile of a 60-shot subsample; holding them there, moving the threshold by one
-/// shot changes only that shot's chi² (its latents re-fitted in each regime), so the profile
-/// over all `n` thresholds is a prefix sum, O(n); the best threshold is then polished by a full
-/// fit.
+/// fit). Up to 60 shots every threshold is fitted. With more shots, holding the globals,
+/// moving the threshold by one shot changes only that shot's chi² (its latents re-fitted in
+/// each regime), so the profile over all `n` thresholds is a prefix sum, O(n); the best
+/// threshold is then fitted in full, and the two steps alternate until the threshold is stable
+/// (at most 4 rounds).
 fn fit_two_regime(
     shots: &[ShotData],
     g0: [f64; NG],
