@@ -26,6 +26,8 @@ enum Command {
     Synth(streakfit::synth::SynthArgs),
     /// Run a pipeline (synth/extract/fit/report with caching), e.g. pipelines/demo.toml.
     Run(streakfit::pipeline::RunArgs),
+    /// Figures and an HTML/Markdown report from angle tables and a fit.
+    Report(streakfit::report::cli::ReportArgs),
     /// Fit material coefficients (e, mu, mu', mu0) with uncertainties and model selection.
     Fit(streakfit::fit::FitArgs),
 }
@@ -47,6 +49,7 @@ fn main() -> ExitCode {
         Command::Extract(a) => streakfit::extract::run(a),
         Command::Synth(a) => streakfit::synth::run(a),
         Command::Run(a) => streakfit::pipeline::run(a),
+        Command::Report(a) => streakfit::report::cli::run(a),
         Command::Fit(a) => streakfit::fit::run(a),
     };
     match result {

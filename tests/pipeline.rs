@@ -213,6 +213,44 @@ fn tiny_pipeline_runs_end_to_end_caches_and_renders_in_chromium() {
         "{stdout3}"
     );
 
+    // `streakfit report` makes the same kind of report from the stage files by hand.
+    let manual = run(
+        &dir,
+        &[
+            "report",
+            "work/test/extract/steel/angles.parquet",
+            "work/test/extract/rubber/angles.parquet",
+            "--fit",
+            "work/test/fit/fit.json",
+            "--overlays",
+            "work/test/extract/steel/overlays",
+            "--overlays",
+            "work/test/extract/rubber/overlays",
+            "--out",
+            "manual",
+        ],
+    );
+    assert_eq!(manual.status.code(), Some(0), "{}", text(&manual.stderr));
+    let manual_html = std::fs::read_to_string(dir.join("manual/index.html")).unwrap();
+    assert!(manual_html.contains("figures/steel_fig12_delta2_jump.png"));
+    assert!(manual_html.contains("overlays/steel-angles/"));
+    assert!(manual_html.contains("overlays/rubber-angles/"));
+    let bad = run(
+        &dir,
+        &[
+            "report",
+            "work/test/extract/steel/angles.parquet",
+            "--overlays",
+            "a",
+            "--overlays",
+            "b",
+            "--out",
+            "m",
+        ],
+    );
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(text(&bad.stderr).contains("--overlays"));
+
     // Headless Chromium: the page renders and every image has loaded (naturalWidth > 0).
     // A copy of the page with a small check script sits beside it, so relative links resolve.
     let browser = chromium().expect(

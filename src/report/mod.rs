@@ -4,7 +4,8 @@
 //! - [`plot`]: declarative charts rendered to PNG and SVG;
 //! - [`theory`]: sampled theory curves (angles vs `psi` for a regime or the auto regime);
 //! - [`figures`]: the paper's figures (Figs. 5, 9–15), residuals;
-//! - [`html`]: `index.html` and `report.md`.
+//! - [`html`]: `index.html` and `report.md`;
+//! - [`cli`]: `streakfit report` from tables and fit files made by hand.
 //!
 //! [`write_report`] takes the angles table (all folders), the fitted coefficients per material
 //! ([`FitSummary`], filled by the pipeline from the fit stage) and the paper's Table 1 presets
@@ -12,6 +13,7 @@
 //! `figures/*.png|svg` and `overlays/*.png` (downscaled copies of the extraction overlays). Every
 //! link is relative and nothing is fetched from the network, so the folder can be moved or zipped.
 
+pub mod cli;
 pub mod figures;
 pub mod html;
 pub mod plot;
