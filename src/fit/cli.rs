@@ -91,15 +91,14 @@ impl FitArgs {
     }
 }
 
-/// Output format by extension.
-fn out_kind(path: &Path, flag: &str, json_ok: bool) -> Result<Option<TableFormat>, CliError> {
+/// Output format by extension: `None` for JSON.
+fn out_kind(path: &Path, flag: &str) -> Result<Option<TableFormat>, CliError> {
     match path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .as_deref()
     {
-        Some("json") if json_ok => Ok(None),
         Some("json") => Ok(None),
         Some("csv") => Ok(Some(TableFormat::Csv)),
         Some("parquet") | Some("pq") => Ok(Some(TableFormat::Parquet)),
@@ -112,9 +111,9 @@ fn out_kind(path: &Path, flag: &str, json_ok: bool) -> Result<Option<TableFormat
 
 pub fn run(args: &FitArgs) -> CliResult {
     let opts = args.options()?;
-    out_kind(&args.out, "--out", true)?;
+    out_kind(&args.out, "--out")?;
     if let Some(r) = &args.residuals {
-        out_kind(r, "--residuals", true)?;
+        out_kind(r, "--residuals")?;
     }
     let mut rows = Vec::new();
     for t in &args.tables {
@@ -336,7 +335,7 @@ pub fn residuals_frame(rows: &[ResidualRow]) -> Result<DataFrame> {
 
 /// Writes the material fits as JSON (array) or CSV/Parquet by extension, atomically.
 pub fn write_fits(path: &Path, fits: &[MaterialFit]) -> Result<(), CliError> {
-    match out_kind(path, "--out", true)? {
+    match out_kind(path, "--out")? {
         None => {
             let text = serde_json::to_string_pretty(fits).map_err(|e| fail(e.into()))?;
             write_bytes_atomic(path, text.as_bytes()).map_err(fail)
@@ -350,7 +349,7 @@ pub fn write_fits(path: &Path, fits: &[MaterialFit]) -> Result<(), CliError> {
 
 /// Writes the per-shot residuals as JSON, CSV or Parquet by extension, atomically.
 pub fn write_residuals(path: &Path, rows: &[ResidualRow]) -> Result<(), CliError> {
-    match out_kind(path, "--residuals", true)? {
+    match out_kind(path, "--residuals")? {
         None => {
             let text = serde_json::to_string_pretty(rows).map_err(|e| fail(e.into()))?;
             write_bytes_atomic(path, text.as_bytes()).map_err(fail)
