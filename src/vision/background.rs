@@ -187,16 +187,14 @@ fn fit_cloth_surface(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> Vec<[f32; 3]>
             DVector::<f64>::zeros(n_in),
             DVector::<f64>::zeros(n_in),
         ];
-        let mut row = 0;
-        for (p, _) in pts.iter().zip(&inlier).filter(|(_, b)| **b) {
+        for (row, (p, _)) in pts.iter().zip(&inlier).filter(|(_, b)| **b).enumerate() {
             poly_terms(p.0, p.1, &mut terms);
             for (j, t) in terms.iter().enumerate() {
                 a[(row, j)] = *t;
             }
-            for c in 0..3 {
-                rhs[c][row] = p.2[c] as f64;
+            for (rc, v) in rhs.iter_mut().zip(p.2) {
+                rc[row] = v as f64;
             }
-            row += 1;
         }
         let svd = a.svd(true, true);
         for c in 0..3 {

@@ -216,6 +216,9 @@ pub struct Problem {
     pub out2: Vec<Sample>,
 }
 
+/// Path models of (cue ball, object ball); the cue ball's is `None` when it stops.
+type Combo = (Option<PathModel>, PathModel);
+
 /// Parameter vector layout: `[ox, oy, R, α, ψs, ball1…, ball2…]`.
 #[derive(Debug, Clone)]
 pub struct JointFit {
@@ -420,7 +423,7 @@ fn lm(model: &Model, x0: &[f64]) -> Vec<f64> {
     let (mut r, mut bounds) = model.residuals(&x);
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
-    for _ in 0..200 {
+    for _ in 0..80 {
         let j = model.jacobian(&x, &bounds);
         let rv = DVector::from_vec(r.clone());
         let a = j.transpose() * &j;
@@ -446,7 +449,7 @@ fn lm(model: &Model, x0: &[f64]) -> Vec<f64> {
                 cost = cn;
                 lambda = (lambda / 3.0).max(1e-12);
                 improved = true;
-                if rel < 1e-12 {
+                if rel < 1e-9 {
                     return x;
                 }
                 break;
@@ -460,8 +463,8 @@ fn lm(model: &Model, x0: &[f64]) -> Vec<f64> {
     x
 }
 
-/// Lag correlation factor `1 + 2 Σ ρ_k` of an ordered residual sequence (sum stops at the first
-/// non-positive `ρ_k`).
+/// Correlation factor of an ordered residual sequence: the larger of `1 + 2 Σ ρ_k` (sum stops at
+/// the first non-positive `ρ_k`) and the batch-means estimate.
 pub fn correlation_factor(r: &[f64]) -> f64 {
     let n = r.len();
     if n < 8 {
@@ -472,6 +475,18 @@ pub fn correlation_factor(r: &[f64]) -> f64 {
     if var <= 0.0 {
         return 1.0;
     }
+    // Batch means over eight blocks catch correlation longer than the first lags show (cloth
+    // texture bends a centre-line over several radii): f ≥ L var(block means) / var(r).
+    let l = (n / 8).max(4);
+    let means: Vec<f64> = r
+        .chunks_exact(l)
+        .map(|c| c.iter().sum::<f64>() / l as f64 - m)
+        .collect();
+    let f_batch = if means.len() >= 3 {
+        l as f64 * means.iter().map(|v| v * v).sum::<f64>() / means.len() as f64 / (var / n as f64)
+    } else {
+        1.0
+    };
     let mut f = 1.0;
     for k in 1..(n / 4).min(40) {
         let c: f64 = (0..n - k).map(|i| (r[i] - m) * (r[i + k] - m)).sum::<f64>() / var;
@@ -480,7 +495,7 @@ pub fn correlation_factor(r: &[f64]) -> f64 {
         }
         f += 2.0 * c;
     }
-    f
+    f.max(f_batch)
 }
 
 fn model_fit<'a>(
@@ -618,7 +633,7 @@ pub fn fit(pb: &Problem, x0: &[f64]) -> Option<JointFit> {
     } else {
         vec![(None, PathModel::Line), (None, PathModel::ParabolaLine)]
     };
-    let mut best: Option<(f64, Vec<f64>, (Option<PathModel>, PathModel))> = None;
+    let mut best: Option<(f64, Vec<f64>, Combo)> = None;
     for c in combos {
         let xs = if c == full {
             x.clone()

@@ -619,9 +619,9 @@ pub fn remeasure(
         }
         out.extend(ext.into_iter().rev());
     }
-    for i in 0..n {
+    for (i, smp) in samples.iter().enumerate() {
         let d = dir_at(i);
-        let p = (samples[i].x, samples[i].y);
+        let p = (smp.x, smp.y);
         if let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl), u) {
             let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
             if snr >= 5.0 && pc.c.abs() < 0.3 * r {
