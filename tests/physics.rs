@@ -262,10 +262,11 @@ fn closed_forms_agree_with_impulse_model_in_every_regime() {
                 st.v1_roll.norm(),
                 st.v2_roll.norm(),
             ];
-            for k in 0..4 {
+            for (k, speed) in speeds.into_iter().enumerate() {
                 let (x, y) = (a.as_array()[k], b.as_array()[k]);
-                // Ill-conditioned directions of near-stopped balls are compared only for definedness.
-                if speeds[k] < 1e-3 * sh.mass_ratio.max(1.0) {
+                // Directions of near-stopped balls are ill-conditioned: skipped here, their
+                // edge cases are pinned in tests/stability.rs.
+                if speed < 1e-3 * sh.mass_ratio.max(1.0) {
                     continue;
                 }
                 let (x, y) = (x.expect("impulse angle"), y.expect("closed angle"));

@@ -133,12 +133,6 @@ pub struct RegimeBoundary {
 /// Every `psi_L` where the auto regime changes, for a cue ball with the given spin and mass ratio.
 pub fn regime_boundaries(template: &Shot, c: &Coefficients) -> Vec<RegimeBoundary> {
     let at = |psi: f64| select_regime(&Shot { psi, ..*template }, c);
-    let code = |r: Regime| match r {
-        Regime::MuMu => 0.0,
-        Regime::SlipMu => 1.0,
-        Regime::MuSlip => 2.0,
-        Regime::SlipSlip => 3.0,
-    };
     let mut out = Vec::new();
     // Each contact's margin changes sign separately; merge them.
     let mut psis = boundaries(|p| {
@@ -161,7 +155,7 @@ pub fn regime_boundaries(template: &Shot, c: &Coefficients) -> Vec<RegimeBoundar
     psis.dedup_by(|a, b| (*a - *b).abs() < 1e-10);
     for psi in psis {
         let (below, above) = (at(psi - 1e-9), at(psi + 1e-9));
-        if code(below) != code(above) {
+        if below != above {
             out.push(RegimeBoundary { psi, below, above });
         }
     }
