@@ -8,6 +8,7 @@
 //! - `report`: figures and HTML reports; `pipeline`: `streakfit run`.
 #![deny(clippy::float_cmp)]
 
+pub mod bench;
 pub mod cli;
 pub mod extract;
 pub mod fit;

@@ -30,6 +30,8 @@ enum Command {
     Report(streakfit::report::cli::ReportArgs),
     /// Fit material coefficients (e, mu, mu', mu0) with uncertainties and model selection.
     Fit(streakfit::fit::FitArgs),
+    /// Benchmarks: `bench speed-error` sweeps each stage's cost knobs against ground truth.
+    Bench(streakfit::bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -51,6 +53,7 @@ fn main() -> ExitCode {
         Command::Run(a) => streakfit::pipeline::run(a),
         Command::Report(a) => streakfit::report::cli::run(a),
         Command::Fit(a) => streakfit::fit::run(a),
+        Command::Bench(a) => streakfit::bench::run(a),
     };
     match result {
         Ok(outcome) => outcome.exit_code(),

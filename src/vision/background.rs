@@ -15,7 +15,6 @@ use super::image_io::RgbImage;
 use nalgebra::{DMatrix, DVector};
 
 /// Downsampled target size (longest side) for the coarse search.
-const COARSE_SIDE: usize = 600;
 
 #[derive(Debug, Clone)]
 pub struct Signal {
@@ -251,7 +250,11 @@ fn fit_cloth_surface(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> Vec<[f32; 3]>
 }
 
 /// Builds the ball signal of a photo; `plate` is the empty-table background when known.
-pub fn build(img: &RgbImage, plate: Option<&RgbImage>) -> Result<Signal, String> {
+pub fn build(
+    img: &RgbImage,
+    plate: Option<&RgbImage>,
+    coarse_side: usize,
+) -> Result<Signal, String> {
     if let Some(p) = plate
         && (p.w != img.w || p.h != img.h)
     {
@@ -260,7 +263,7 @@ pub fn build(img: &RgbImage, plate: Option<&RgbImage>) -> Result<Signal, String>
             p.w, p.h, img.w, img.h
         ));
     }
-    let f = img.w.max(img.h).div_ceil(COARSE_SIDE).max(1);
+    let f = img.w.max(img.h).div_ceil(coarse_side.max(16)).max(1);
     let (cw, ch, c_img) = block_mean(img, f);
     let bg = match plate {
         Some(p) => block_mean(p, f).2,

@@ -36,4 +36,4 @@ pub mod pathfit;
 pub mod shot;
 pub mod streak;
 
-pub use shot::{Analysis, AnalysisOptions, analyse};
+pub use shot::{Analysis, AnalysisOptions, PathModels, analyse};

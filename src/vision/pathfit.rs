@@ -418,12 +418,12 @@ impl Model<'_> {
     }
 }
 
-fn lm(model: &Model, x0: &[f64]) -> Vec<f64> {
+fn lm(model: &Model, x0: &[f64], s: &FitSettings) -> Vec<f64> {
     let mut x = x0.to_vec();
     let (mut r, mut bounds) = model.residuals(&x);
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
-    for _ in 0..80 {
+    for _ in 0..s.lm_max_iter {
         let j = model.jacobian(&x, &bounds);
         let rv = DVector::from_vec(r.clone());
         let a = j.transpose() * &j;
@@ -449,7 +449,7 @@ fn lm(model: &Model, x0: &[f64]) -> Vec<f64> {
                 cost = cn;
                 lambda = (lambda / 3.0).max(1e-12);
                 improved = true;
-                if rel < 1e-9 {
+                if rel < s.lm_rel_tol {
                     return x;
                 }
                 break;
@@ -504,9 +504,10 @@ fn model_fit<'a>(
     m2: PathModel,
     x0: &[f64],
     use_: [Vec<bool>; 3],
+    s: &FitSettings,
 ) -> (Vec<f64>, Model<'a>) {
     let model = Model { pb, m1, m2, use_ };
-    let x = lm(&model, x0);
+    let x = lm(&model, x0, s);
     (x, model)
 }
 
@@ -541,22 +542,54 @@ fn convert(
     out
 }
 
+/// Cost knobs of [`fit`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitSettings {
+    /// Only straight lines for the outgoing balls (no sliding parabola).
+    pub line_only: bool,
+    /// Rounds of outlier rejection (refit on inliers) on the richest model.
+    pub robust_rounds: usize,
+    /// Levenberg–Marquardt: iteration cap and relative cost decrease that stops it.
+    pub lm_max_iter: usize,
+    pub lm_rel_tol: f64,
+}
+
+impl Default for FitSettings {
+    fn default() -> Self {
+        Self {
+            line_only: false,
+            robust_rounds: 3,
+            lm_max_iter: 80,
+            lm_rel_tol: 1e-9,
+        }
+    }
+}
+
 /// Fits the joint model, robustly, for every combination of path models, and keeps the one with
 /// the lowest BIC. `x0` is a start in the `parabola+line` layout (ball 1 absent when `out1` is).
-pub fn fit(pb: &Problem, x0: &[f64]) -> Option<JointFit> {
-    let full = (
+pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit> {
+    let richest = (
         pb.out1.as_ref().map(|_| PathModel::ParabolaLine),
         PathModel::ParabolaLine,
     );
+    let full = if settings.line_only {
+        (pb.out1.as_ref().map(|_| PathModel::Line), PathModel::Line)
+    } else {
+        richest
+    };
     let mut use_ = [
         vec![true; pb.incoming.len()],
         vec![true; pb.out1.as_ref().map_or(0, |v| v.len())],
         vec![true; pb.out2.len()],
     ];
-    let mut x = x0.to_vec();
-    // Robust loop on the richest model.
-    for _round in 0..3 {
-        let (xf, model) = model_fit(pb, full.0, full.1, &x, use_.clone());
+    let mut x = if full == richest {
+        x0.to_vec()
+    } else {
+        convert(x0, richest, full, x0[2])
+    };
+    // Robust loop on the richest model allowed.
+    for _round in 0..settings.robust_rounds.max(1) {
+        let (xf, model) = model_fit(pb, full.0, full.1, &x, use_.clone(), settings);
         x = xf;
         // Normalised residuals of all samples (inliers and outliers).
         let geom1 = full
@@ -625,7 +658,9 @@ pub fn fit(pb: &Problem, x0: &[f64]) -> Option<JointFit> {
         }
         (acc / n.max(1.0)).max(1.0)
     };
-    let combos: Vec<(Option<PathModel>, PathModel)> = if pb.out1.is_some() {
+    let combos: Vec<(Option<PathModel>, PathModel)> = if settings.line_only {
+        vec![full]
+    } else if pb.out1.is_some() {
         let ms = [PathModel::Line, PathModel::ParabolaLine];
         ms.iter()
             .flat_map(|a| ms.iter().map(move |b| (Some(*a), *b)))
@@ -639,7 +674,7 @@ pub fn fit(pb: &Problem, x0: &[f64]) -> Option<JointFit> {
             x.clone()
         } else {
             let start = convert(&x, full, c, x[2]);
-            model_fit(pb, c.0, c.1, &start, use_.clone()).0
+            model_fit(pb, c.0, c.1, &start, use_.clone(), settings).0
         };
         let model = Model {
             pb,

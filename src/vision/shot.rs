@@ -20,11 +20,103 @@ use super::streak::{self, KeepOut, Sample};
 use crate::table::Status;
 use rand::{Rng, SeedableRng};
 
-/// Options of the per-image analysis.
-#[derive(Debug, Clone, Default)]
+/// Options of the per-image analysis, including its cost knobs (swept by
+/// `streakfit bench speed-error`; the defaults sit on the measured Pareto front).
+#[derive(Debug, Clone, PartialEq)]
 pub struct AnalysisOptions {
     /// Largest fraction of saturated pixels accepted.
     pub max_saturated: Option<f64>,
+    /// Longer side, in pixels, of the block-averaged image of the coarse pass (cloth model,
+    /// disc and streak search).
+    pub coarse_side: usize,
+    /// Spacing of the centre-line samples along a streak, in ball radii.
+    pub sample_step_r: f64,
+    /// Path models tried per outgoing ball.
+    pub path_models: PathModels,
+    /// Settings of the joint path fit.
+    pub fit: pathfit::FitSettings,
+}
+
+impl Default for AnalysisOptions {
+    fn default() -> Self {
+        Self {
+            max_saturated: None,
+            coarse_side: 600,
+            sample_step_r: 0.1,
+            path_models: PathModels::Auto,
+            fit: pathfit::FitSettings::default(),
+        }
+    }
+}
+
+/// Which path models the joint fit may choose between.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PathModels {
+    /// A straight line or a sliding parabola tangent to the rolling line, by BIC.
+    Auto,
+    /// Straight lines only: `delta = theta` (fast, biased where the sliding arc is visible).
+    LineOnly,
+}
+
+impl AnalysisOptions {
+    /// The settings `streakfit bench speed-error` sweeps: `(name, options, is_default)`, one knob
+    /// changed from the default at a time.
+    pub fn speed_settings() -> Vec<(String, AnalysisOptions, bool)> {
+        let d = AnalysisOptions::default();
+        let mut out = vec![("default".to_string(), d.clone(), true)];
+        for side in [300, 450, 900] {
+            out.push((
+                format!("coarse_side={side}"),
+                AnalysisOptions {
+                    coarse_side: side,
+                    ..d.clone()
+                },
+                false,
+            ));
+        }
+        for step in [0.05, 0.2, 0.4] {
+            out.push((
+                format!("sample_step_r={step}"),
+                AnalysisOptions {
+                    sample_step_r: step,
+                    ..d.clone()
+                },
+                false,
+            ));
+        }
+        out.push((
+            "path_models=line".into(),
+            AnalysisOptions {
+                path_models: PathModels::LineOnly,
+                ..d.clone()
+            },
+            false,
+        ));
+        for rounds in [1, 5] {
+            let fit = pathfit::FitSettings {
+                robust_rounds: rounds,
+                ..d.fit
+            };
+            out.push((
+                format!("robust_rounds={rounds}"),
+                AnalysisOptions { fit, ..d.clone() },
+                false,
+            ));
+        }
+        for (iters, tol) in [(20, 1e-6), (200, 1e-12)] {
+            let fit = pathfit::FitSettings {
+                lm_max_iter: iters,
+                lm_rel_tol: tol,
+                ..d.fit
+            };
+            out.push((
+                format!("lm_iter={iters},tol={tol:e}"),
+                AnalysisOptions { fit, ..d.clone() },
+                false,
+            ));
+        }
+        out
+    }
 }
 
 /// Role of a streak in the scene.
@@ -347,7 +439,7 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
             format!("saturated: {:.1}% of pixels at full scale", 100.0 * sat),
         );
     }
-    let sig = match background::build(img, plate) {
+    let sig = match background::build(img, plate, opts.coarse_side) {
         Ok(s) => s,
         Err(e) => return Analysis::declined(Status::Declined, e),
     };
@@ -374,7 +466,7 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         .iter()
         .take(4)
         .map(|c| {
-            let t = streak::track(&sig, c.seed, c.dir, r, ko, c.u);
+            let t = streak::track(&sig, c.seed, c.dir, r, opts.sample_step_r, ko, c.u);
             if debug {
                 eprintln!(
                     "candidate seed=({:.0},{:.0}) dir=({:.3},{:.3}) weight={:.3} samples={} u={:?}",
@@ -541,7 +633,15 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
             pts.extend(kept[b].iter().map(|q| (q.x, q.y)));
             ex.add_band(&pts, 1.1 * r + 1.5, r);
         }
-        let m = streak::remeasure(&sig, &raw[a], start_of(a), r, &ex, colours[a]);
+        let m = streak::remeasure(
+            &sig,
+            &raw[a],
+            start_of(a),
+            r,
+            opts.sample_step_r,
+            &ex,
+            colours[a],
+        );
         if m.len() >= 5 {
             measured[a] = m;
         }
@@ -571,7 +671,11 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         }
         let _ = std::fs::write(path, txt);
     }
-    let Some(fit) = pathfit::fit(&pb, &reading.x0) else {
+    let settings = pathfit::FitSettings {
+        line_only: opts.path_models == PathModels::LineOnly,
+        ..opts.fit
+    };
+    let Some(fit) = pathfit::fit(&pb, &reading.x0, &settings) else {
         out.reason = "path fit failed (too few consistent centre-line points)".into();
         return out;
     };

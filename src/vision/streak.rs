@@ -421,10 +421,11 @@ pub fn track(
     seed: (f64, f64),
     dir: (f64, f64),
     r: f64,
+    step_r: f64,
     keep_out: KeepOut,
     u: [f32; 3],
 ) -> Vec<Sample> {
-    let step = (r / 10.0).max(2.0);
+    let step = (r * step_r).max(2.0);
     let outward = walk(sig, seed, dir, r, step, keep_out, u);
     let inward = walk(sig, seed, (-dir.0, -dir.1), r, step, keep_out, u);
     let mut all: Vec<Sample> = inward.into_iter().skip(1).rev().collect();
@@ -566,10 +567,11 @@ pub fn remeasure(
     samples: &[Sample],
     start: (f64, f64),
     r: f64,
+    step_r: f64,
     excl: &Exclusion,
     u: [f32; 3],
 ) -> Vec<Sample> {
-    let step = (r / 10.0).max(2.0);
+    let step = (r * step_r).max(2.0);
     let n = samples.len();
     let dir_at = |i: usize| {
         let k = ((2.0 * r / step) as usize).max(1);

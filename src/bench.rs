@@ -1,0 +1,572 @@
+//! `streakfit bench speed-error`: what each unit of speed costs in accuracy.
+//!
+//! On a pinned (seeded) synthetic set with ground truth, every cost knob of a stage is swept and
+//! each setting's seconds per item and angle errors are recorded:
+//! - `extract`: the extractor's knobs ([`crate::vision::AnalysisOptions::speed_settings`]), seconds
+//!   per image (decode excluded, one thread) against |error| of `psi, delta, theta` pooled;
+//! - `theory`: closed forms against the impulse model (the reference), seconds per evaluation;
+//! - `fit`: seconds per fit of `n` shots against |e - e_true|, known and estimated spin.
+//!
+//! Writes `OUT/speed_error.csv` (`stage, setting, is_default, seconds_per_item, median_err_deg,
+//! p90_err_deg, ok_fraction, n_items, on_pareto_front`) and a Pareto plot `OUT/pareto.png|svg`
+//! (time against median error per stage, default marked).
+
+use crate::cli::{CliError, CliResult, Outcome};
+use crate::physics::{Coefficients, RegimeChoice, Shot, closed, impulse};
+use anyhow::{Context, Result, anyhow};
+use clap::{Args, Subcommand};
+use rand::{Rng, SeedableRng};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Debug, Args, Clone)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub kind: BenchKind,
+}
+
+#[derive(Debug, Subcommand, Clone)]
+pub enum BenchKind {
+    /// Sweep the cost knobs of extraction, theory and fit; write speed_error.csv and a Pareto plot.
+    SpeedError(SpeedErrorArgs),
+}
+
+#[derive(Debug, Args, Clone)]
+pub struct SpeedErrorArgs {
+    /// Output folder (the synthetic set is cached under it).
+    #[arg(long, default_value = "reports/bench")]
+    pub out: PathBuf,
+    /// Shots in the pinned synthetic photo set.
+    #[arg(long, default_value_t = 24)]
+    pub shots: usize,
+    /// Seed of the pinned set.
+    #[arg(long, default_value_t = 2026)]
+    pub seed: u64,
+    /// Tier of the pinned set (clean, realistic or hard).
+    #[arg(long, default_value = "realistic")]
+    pub tier: String,
+    /// Stages to run (comma-separated subset of extract,theory,fit).
+    #[arg(long, default_value = "extract,theory,fit")]
+    pub stages: String,
+}
+
+/// One row of `speed_error.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchRow {
+    pub stage: String,
+    pub setting: String,
+    pub is_default: bool,
+    pub seconds_per_item: f64,
+    pub median_err_deg: f64,
+    pub p90_err_deg: f64,
+    pub ok_fraction: f64,
+    pub n_items: usize,
+    pub on_pareto_front: bool,
+}
+
+/// Quantile `q` of `v` (linear interpolation); NaN for an empty slice.
+pub fn quantile(v: &[f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let pos = q.clamp(0.0, 1.0) * (s.len() - 1) as f64;
+    let (i, f) = (pos.floor() as usize, pos.fract());
+    if i + 1 < s.len() {
+        s[i] * (1.0 - f) + s[i + 1] * f
+    } else {
+        s[i]
+    }
+}
+
+/// Marks the rows of each stage that no other row of the stage beats in both time and median
+/// error (ties count as not beaten).
+pub fn mark_pareto(rows: &mut [BenchRow]) {
+    let snapshot = rows.to_vec();
+    for r in rows.iter_mut() {
+        r.on_pareto_front = r.median_err_deg.is_finite()
+            && !snapshot.iter().any(|o| {
+                o.stage == r.stage
+                    && o.median_err_deg.is_finite()
+                    && o.seconds_per_item <= r.seconds_per_item
+                    && o.median_err_deg <= r.median_err_deg
+                    && (o.seconds_per_item < r.seconds_per_item
+                        || o.median_err_deg < r.median_err_deg)
+            });
+    }
+}
+
+/// Theory stage: closed forms vs the impulse model on random shots, auto regime.
+pub fn theory_rows(n: usize, seed: u64) -> Vec<BenchRow> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let set: Vec<(Shot, Coefficients)> = (0..n)
+        .map(|_| {
+            let mu = rng.gen_range(0.02..0.7);
+            (
+                Shot {
+                    psi: rng.gen_range(0.0..1.5),
+                    mass_ratio: 1.0,
+                    spin: rng.gen_range(-2.0..2.0),
+                    english: rng.gen_range(-0.5..0.5),
+                },
+                Coefficients::new(rng.gen_range(0.5..1.0), mu, rng.gen_range(0.0..0.6))
+                    .with_static(mu * 1.2),
+            )
+        })
+        .collect();
+    let reference: Vec<_> = set
+        .iter()
+        .map(|(s, c)| impulse::solve(s, c, RegimeChoice::Auto).angles())
+        .collect();
+    let time = |f: &dyn Fn(&Shot, &Coefficients) -> crate::physics::ShotAngles| {
+        // Best of five passes: the machine's other load only ever adds time.
+        (0..5)
+            .map(|_| {
+                let t = Instant::now();
+                for (s, c) in &set {
+                    std::hint::black_box(f(s, c));
+                }
+                t.elapsed().as_secs_f64() / set.len() as f64
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let closed_fn = |s: &Shot, c: &Coefficients| closed::predict_auto(s, c).1;
+    let impulse_fn = |s: &Shot, c: &Coefficients| impulse::solve(s, c, RegimeChoice::Auto).angles();
+    let errs = |f: &dyn Fn(&Shot, &Coefficients) -> crate::physics::ShotAngles| -> Vec<f64> {
+        set.iter()
+            .zip(&reference)
+            .flat_map(|((s, c), r)| {
+                f(s, c)
+                    .as_array()
+                    .into_iter()
+                    .zip(r.as_array())
+                    .filter_map(|(a, b)| Some((a? - b?).to_degrees().abs()))
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    };
+    let mut out = Vec::new();
+    for (name, f, default) in [
+        (
+            "closed-form",
+            &closed_fn as &dyn Fn(&Shot, &Coefficients) -> _,
+            true,
+        ),
+        (
+            "impulse-model",
+            &impulse_fn as &dyn Fn(&Shot, &Coefficients) -> _,
+            false,
+        ),
+    ] {
+        let e = errs(f);
+        out.push(BenchRow {
+            stage: "theory".into(),
+            setting: name.into(),
+            is_default: default,
+            seconds_per_item: time(f),
+            median_err_deg: quantile(&e, 0.5),
+            p90_err_deg: quantile(&e, 0.9),
+            ok_fraction: 1.0,
+            n_items: n,
+            on_pareto_front: false,
+        });
+    }
+    out
+}
+
+/// Fit stage: billiard-ball synthetic tables (0.3° noise) of growing size, known and estimated
+/// spin; error is |e - e_true| in units of degrees' stand-in (the absolute error of `e` × 100
+/// would mix units, so the column holds |e - e_true| itself, noted in the setting name).
+pub fn fit_rows(seed: u64) -> Result<Vec<BenchRow>> {
+    use crate::fit::synthetic::{SyntheticSpec, SyntheticSpin, synthetic_table};
+    use crate::fit::{FitOptions, SpinMode, fit_materials};
+    let truth = Coefficients::new(0.97, 0.07, 0.15);
+    let mut out = Vec::new();
+    for (spin_name, spin, mode) in [
+        ("known-spin", SyntheticSpin::Rolling, SpinMode::Known),
+        (
+            "estimated-spin",
+            SyntheticSpin::Mixed {
+                r_lo: -1.0,
+                r_hi: 1.5,
+                s_max: 0.3,
+                write: false,
+            },
+            SpinMode::Estimate,
+        ),
+    ] {
+        for n in [30usize, 100, 300, 1000] {
+            let mut errs = Vec::new();
+            let mut secs = f64::INFINITY;
+            for rep in 0..3u64 {
+                let spec = SyntheticSpec {
+                    material: "billiard".into(),
+                    coefficients: truth,
+                    n,
+                    psi_lo_deg: 10.0,
+                    psi_hi_deg: 70.0,
+                    noise_deg: 0.3,
+                    spin,
+                    seed: seed + rep,
+                };
+                let (rows, _) = synthetic_table(&spec);
+                let opts = FitOptions {
+                    spin: mode,
+                    bootstrap: 0,
+                    ..FitOptions::default()
+                };
+                let t = Instant::now();
+                let fit = fit_materials(&rows, &opts)?;
+                secs = secs.min(t.elapsed().as_secs_f64());
+                let e = fit
+                    .fits
+                    .first()
+                    .and_then(|f| f.e)
+                    .ok_or_else(|| anyhow!("fit returned no e"))?;
+                errs.push((e - truth.e).abs());
+            }
+            out.push(BenchRow {
+                stage: "fit".into(),
+                setting: format!("{spin_name} n={n} (error = |e - e_true|)"),
+                is_default: n == 30 && mode == SpinMode::Known,
+                seconds_per_item: secs,
+                median_err_deg: quantile(&errs, 0.5),
+                p90_err_deg: quantile(&errs, 0.9),
+                ok_fraction: 1.0,
+                n_items: n,
+                on_pareto_front: false,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The extractor's cost settings swept by the bench: `(name, options, is_default)`.
+pub fn extract_settings() -> Vec<(String, crate::vision::AnalysisOptions, bool)> {
+    crate::vision::AnalysisOptions::speed_settings()
+}
+
+/// Makes (or reuses) the pinned synthetic set `OUT/set_TIER_SEED_SHOTS`.
+fn pinned_set(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<PathBuf> {
+    use clap::ValueEnum;
+    let t = crate::synth::Tier::from_str(tier, true).map_err(|e| anyhow!("--tier: {e}"))?;
+    let dir = out.join(format!("set_{tier}_{seed}_{shots}"));
+    if !dir.join("truth.csv").exists() {
+        let args = crate::synth::SynthArgs::new(&dir, t, shots, seed);
+        crate::synth::run(&args).map_err(|e| anyhow!("synth for the bench: {e}"))?;
+    }
+    Ok(dir)
+}
+
+/// Extraction stage: every setting of [`extract_settings`] on the pinned set, one thread,
+/// decode excluded; errors pooled over `psi, delta1, delta2, theta1, theta2` of `ok` rows.
+pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<Vec<BenchRow>> {
+    use crate::vision::{analyse, image_io};
+    let dir = pinned_set(out, shots, seed, tier)?;
+    let truth_text = std::fs::read_to_string(dir.join("truth.csv"))?;
+    let truth =
+        crate::synth::truth::read_csv(&truth_text).map_err(|e| anyhow!("truth.csv: {e}"))?;
+    let jobs = crate::extract::list_jobs(std::slice::from_ref(&dir)).map_err(|e| anyhow!("{e}"))?;
+    let mut images = Vec::new();
+    for j in &jobs {
+        let img = image_io::load(&j.path).map_err(|e| anyhow!("{}: {e}", j.path.display()))?;
+        let plate = match &j.plate {
+            Some(p) => Some(image_io::load(p).map_err(|e| anyhow!("{}: {e}", p.display()))?),
+            None => None,
+        };
+        let t = truth
+            .iter()
+            .find(|r| r.get("file") == Some(&j.file))
+            .ok_or_else(|| anyhow!("{} has no truth row", j.file))?;
+        images.push((img, plate, t));
+    }
+    let angle = |a: f64, b: f64| ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs();
+    let mut rows = Vec::new();
+    for (name, opts, is_default) in extract_settings() {
+        let (mut errs, mut ok, mut secs) = (Vec::new(), 0usize, 0.0);
+        for (img, plate, t) in &images {
+            let start = Instant::now();
+            let a = analyse(img, plate.as_ref(), &opts);
+            secs += start.elapsed().as_secs_f64();
+            if a.status != crate::table::Status::Ok {
+                continue;
+            }
+            ok += 1;
+            let measured = [
+                a.psi_deg,
+                a.delta1_deg,
+                a.delta2_deg,
+                a.theta1_deg,
+                a.theta2_deg,
+            ];
+            for (m, key) in measured.iter().zip([
+                "psi_deg",
+                "delta1_deg",
+                "delta2_deg",
+                "theta1_deg",
+                "theta2_deg",
+            ]) {
+                if let (Some(m), Some(Ok(tv))) = (m, t.get(key).map(|v| v.parse::<f64>())) {
+                    errs.push(angle(*m, tv));
+                }
+            }
+        }
+        rows.push(BenchRow {
+            stage: "extract".into(),
+            setting: name,
+            is_default,
+            seconds_per_item: secs / images.len().max(1) as f64,
+            median_err_deg: quantile(&errs, 0.5),
+            p90_err_deg: quantile(&errs, 0.9),
+            ok_fraction: ok as f64 / images.len().max(1) as f64,
+            n_items: images.len(),
+            on_pareto_front: false,
+        });
+    }
+    Ok(rows)
+}
+
+/// Writes the rows as CSV through polars, atomically.
+pub fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
+    use polars::prelude::*;
+    let mut df = DataFrame::new(
+        rows.len(),
+        vec![
+            Column::new(
+                "stage".into(),
+                rows.iter().map(|r| r.stage.clone()).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "setting".into(),
+                rows.iter().map(|r| r.setting.clone()).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "is_default".into(),
+                rows.iter().map(|r| r.is_default).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "seconds_per_item".into(),
+                rows.iter().map(|r| r.seconds_per_item).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "median_err_deg".into(),
+                rows.iter().map(|r| r.median_err_deg).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "p90_err_deg".into(),
+                rows.iter().map(|r| r.p90_err_deg).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "ok_fraction".into(),
+                rows.iter().map(|r| r.ok_fraction).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "n_items".into(),
+                rows.iter().map(|r| r.n_items as u64).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "on_pareto_front".into(),
+                rows.iter().map(|r| r.on_pareto_front).collect::<Vec<_>>(),
+            ),
+        ],
+    )?;
+    crate::table::write_frame_atomic(path, crate::table::TableFormat::Csv, &mut df)
+}
+
+/// Pareto plot: log10 seconds per item against log10 median error, one panel per stage.
+pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
+    use crate::report::plot::{
+        Dash, DataPoint, Figure, LegendAt, Line, Marker, Note, Panel, Points,
+    };
+    use plotters::style::RGBColor;
+    let mut panels = Vec::new();
+    for stage in ["extract", "theory", "fit"] {
+        let rs: Vec<&BenchRow> = rows
+            .iter()
+            .filter(|r| r.stage == stage && r.median_err_deg > 0.0)
+            .collect();
+        if rs.is_empty() {
+            continue;
+        }
+        let pt = |r: &BenchRow| DataPoint {
+            x: r.seconds_per_item.log10(),
+            y: r.median_err_deg.log10(),
+            x_err: None,
+            y_err: None,
+        };
+        let unit = if stage == "fit" {
+            "|e - e_true|"
+        } else {
+            "median |error| (deg)"
+        };
+        let mut panel = Panel::new(
+            format!("{stage}: speed against error"),
+            "log10 seconds per item",
+            format!("log10 {unit}"),
+        );
+        let mut front: Vec<&BenchRow> = rs.iter().copied().filter(|r| r.on_pareto_front).collect();
+        front.sort_by(|a, b| a.seconds_per_item.total_cmp(&b.seconds_per_item));
+        panel.lines.push(
+            Line::new("Pareto front", RGBColor(120, 120, 120), Dash::Dashed).with_samples(
+                front.iter().map(|r| {
+                    (
+                        r.seconds_per_item.log10(),
+                        Some(r.median_err_deg.log10()),
+                        false,
+                    )
+                }),
+            ),
+        );
+        panel.points.push(Points {
+            label: Some("settings".into()),
+            points: rs.iter().filter(|r| !r.is_default).map(|r| pt(r)).collect(),
+            color: RGBColor(40, 90, 170),
+            marker: Marker::Circle,
+        });
+        panel.points.push(Points {
+            label: Some("default".into()),
+            points: rs.iter().filter(|r| r.is_default).map(|r| pt(r)).collect(),
+            color: RGBColor(200, 40, 40),
+            marker: Marker::Square,
+        });
+        for r in &rs {
+            panel.notes.push(Note {
+                x: r.seconds_per_item.log10(),
+                y: r.median_err_deg.log10(),
+                text: format!("  {}", r.setting.split(" (").next().unwrap_or(&r.setting)),
+                color: RGBColor(60, 60, 60),
+            });
+        }
+        panel.legend = LegendAt::UpperRight;
+        panels.push(panel.auto_x(0.5).auto_y(0.5));
+    }
+    Figure::new(
+        "pareto",
+        "Speed against error for each stage's cost knobs (default in red).",
+        panels,
+    )
+}
+
+/// Runs the chosen stages and writes the CSV and the plot; returns the rows.
+pub fn speed_error(args: &SpeedErrorArgs) -> Result<Vec<BenchRow>, CliError> {
+    let stages: Vec<&str> = args.stages.split(',').map(str::trim).collect();
+    for s in &stages {
+        if !["extract", "theory", "fit"].contains(s) {
+            return Err(CliError::usage(format!(
+                "--stages: unknown stage '{s}' (extract, theory, fit)"
+            )));
+        }
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let mut rows = Vec::new();
+    if stages.contains(&"extract") {
+        rows.extend(extract_rows(&args.out, args.shots, args.seed, &args.tier)?);
+    }
+    if stages.contains(&"theory") {
+        rows.extend(theory_rows(20_000, args.seed));
+    }
+    if stages.contains(&"fit") {
+        rows.extend(fit_rows(args.seed)?);
+    }
+    mark_pareto(&mut rows);
+    write_csv(&rows, &args.out.join("speed_error.csv"))?;
+    crate::report::plot::save(&pareto_figure(&rows), &args.out)?;
+    Ok(rows)
+}
+
+pub fn run(args: &BenchArgs) -> CliResult {
+    match &args.kind {
+        BenchKind::SpeedError(a) => {
+            let rows = speed_error(a)?;
+            println!(
+                "{:<8} {:<44} {:>3} {:>12} {:>10} {:>10} {:>5} {:>6}",
+                "stage", "setting", "def", "s/item", "median", "p90", "ok", "pareto"
+            );
+            for r in &rows {
+                println!(
+                    "{:<8} {:<44} {:>3} {:>12.3e} {:>10.4} {:>10.4} {:>5.2} {:>6}",
+                    r.stage,
+                    r.setting,
+                    if r.is_default { "*" } else { "" },
+                    r.seconds_per_item,
+                    r.median_err_deg,
+                    r.p90_err_deg,
+                    r.ok_fraction,
+                    if r.on_pareto_front { "yes" } else { "no" }
+                );
+            }
+            let off: Vec<&BenchRow> = rows
+                .iter()
+                .filter(|r| r.is_default && !r.on_pareto_front)
+                .collect();
+            for r in &off {
+                eprintln!(
+                    "warning: default {} setting '{}' is not on the Pareto front",
+                    r.stage, r.setting
+                );
+            }
+            println!("wrote {}", a.out.join("speed_error.csv").display());
+            Ok(if off.is_empty() {
+                Outcome::Ok
+            } else {
+                Outcome::SomeFailed
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(stage: &str, t: f64, e: f64) -> BenchRow {
+        BenchRow {
+            stage: stage.into(),
+            setting: format!("{t}/{e}"),
+            is_default: false,
+            seconds_per_item: t,
+            median_err_deg: e,
+            p90_err_deg: e,
+            ok_fraction: 1.0,
+            n_items: 1,
+            on_pareto_front: false,
+        }
+    }
+
+    #[test]
+    fn pareto_front_keeps_only_unbeaten_settings_per_stage() {
+        let mut rows = vec![
+            row("a", 1.0, 1.0),
+            row("a", 2.0, 0.5),
+            row("a", 3.0, 0.6),
+            row("a", 1.0, 1.2),
+            row("b", 9.0, 9.0),
+        ];
+        mark_pareto(&mut rows);
+        let front: Vec<bool> = rows.iter().map(|r| r.on_pareto_front).collect();
+        assert_eq!(front, [true, true, false, false, true]);
+    }
+
+    #[test]
+    fn quantiles_interpolate() {
+        assert!((quantile(&[3.0, 1.0, 2.0, 4.0], 0.5) - 2.5).abs() < 1e-12);
+        assert!((quantile(&[1.0, 2.0, 3.0, 4.0, 5.0], 0.9) - 4.6).abs() < 1e-12);
+        assert!(quantile(&[], 0.5).is_nan());
+    }
+
+    #[test]
+    fn closed_forms_match_the_impulse_model_reference() {
+        let rows = theory_rows(2000, 3);
+        assert_eq!(
+            (rows[0].setting.as_str(), rows[0].is_default),
+            ("closed-form", true)
+        );
+        assert!(
+            rows[0].median_err_deg < 1e-10 && rows[0].p90_err_deg < 1e-9,
+            "{rows:?}"
+        );
+        assert!(rows[1].p90_err_deg.abs() < f64::MIN_POSITIVE);
+    }
+}
