@@ -81,7 +81,8 @@ pub fn quantile(v: &[f64], q: f64) -> f64 {
 }
 
 /// Marks the rows of each stage that no other row of the stage beats in both time and median
-/// error (ties count as not beaten).
+/// error without measuring fewer items (a setting that declines more photos does not beat one
+/// that measures them); ties count as not beaten.
 pub fn mark_pareto(rows: &mut [BenchRow]) {
     let snapshot = rows.to_vec();
     for r in rows.iter_mut() {
@@ -89,6 +90,7 @@ pub fn mark_pareto(rows: &mut [BenchRow]) {
             && !snapshot.iter().any(|o| {
                 o.stage == r.stage
                     && o.median_err_deg.is_finite()
+                    && o.ok_fraction >= r.ok_fraction
                     && o.seconds_per_item <= r.seconds_per_item
                     && o.median_err_deg <= r.median_err_deg
                     && (o.seconds_per_item < r.seconds_per_item
@@ -286,9 +288,18 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
     for (name, opts, is_default) in extract_settings() {
         let (mut errs, mut ok, mut secs) = (Vec::new(), 0usize, 0.0);
         for (img, plate, t) in &images {
-            let start = Instant::now();
-            let a = analyse(img, plate.as_ref(), &opts);
-            secs += start.elapsed().as_secs_f64();
+            // Best of two runs: other load on the machine only ever adds time; the analysis
+            // is deterministic, so both runs give the same numbers.
+            let mut best = f64::INFINITY;
+            let mut a = None;
+            for _ in 0..2 {
+                let start = Instant::now();
+                let r = analyse(img, plate.as_ref(), &opts);
+                best = best.min(start.elapsed().as_secs_f64());
+                a = Some(r);
+            }
+            secs += best;
+            let a = a.expect("two runs");
             if a.status != crate::table::Status::Ok {
                 continue;
             }
