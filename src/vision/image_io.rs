@@ -45,6 +45,11 @@ pub fn load(path: &Path) -> Result<RgbImage, String> {
     if reader.format().is_none() {
         return Err("not a recognised image format (JPEG, PNG or TIFF expected)".into());
     }
+    // The JPEG decoder fills a truncated file's missing rows with grey instead of failing; a
+    // complete JPEG ends with the end-of-image marker FF D9 (possibly followed by padding).
+    if reader.format() == Some(image::ImageFormat::Jpeg) && !jpeg_is_complete(path)? {
+        return Err("corrupt image: truncated JPEG (no end-of-image marker)".into());
+    }
     let img = reader
         .decode()
         .map_err(|e| format!("corrupt or unsupported image: {e}"))?;
@@ -56,4 +61,26 @@ pub fn load(path: &Path) -> Result<RgbImage, String> {
         ));
     }
     Ok(out)
+}
+
+/// True if the JPEG file ends with the end-of-image marker, allowing trailing padding bytes.
+fn jpeg_is_complete(path: &Path) -> Result<bool, String> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut f = std::fs::File::open(path).map_err(|e| format!("cannot open file: {e}"))?;
+    let len = f
+        .metadata()
+        .map_err(|e| format!("cannot read file: {e}"))?
+        .len();
+    let tail = len.min(4096);
+    f.seek(SeekFrom::Start(len - tail))
+        .map_err(|e| format!("cannot read file: {e}"))?;
+    let mut buf = Vec::with_capacity(tail as usize);
+    f.read_to_end(&mut buf)
+        .map_err(|e| format!("cannot read file: {e}"))?;
+    let end = buf
+        .iter()
+        .rposition(|&b| b != 0x00 && b != 0xFF)
+        .map_or(0, |i| i + 1);
+    // `end` points past the last byte that is not padding; the marker is FF D9 ending there.
+    Ok(end >= 2 && buf[end - 1] == 0xD9 && buf[end - 2] == 0xFF)
 }
