@@ -103,7 +103,7 @@ impl AnalysisOptions {
                 false,
             ));
         }
-        for (iters, tol) in [(20, 1e-6), (200, 1e-12)] {
+        for (iters, tol) in [(8, 1e-4), (80, 1e-9), (200, 1e-12)] {
             let fit = pathfit::FitSettings {
                 lm_max_iter: iters,
                 lm_rel_tol: tol,
