@@ -1,0 +1,47 @@
+#!/usr/bin/env python3
+"""Extraction accuracy against ground truth, as quoted in the README.
+
+Usage: compare_truth.py DIR TABLE.csv [DIR TABLE.csv ...]
+DIR holds a synthetic set (`streakfit synth`, with truth.csv); TABLE.csv is `streakfit extract
+DIR --out TABLE.csv`. Prints, per angle, the median and 90th percentile of |measured - true| over
+the `ok` rows where both are defined, how many rows were `ok`, and the sigma ratio
+median(|error| / stated sigma) / 0.6745 (1 for honest Gaussian 1-sigma errors).
+"""
+import csv
+import statistics
+import sys
+
+
+def angle_error(a, b):
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def report(folder, table):
+    truth = {r["file"]: r for r in csv.DictReader(open(f"{folder}/truth.csv"))}
+    rows = list(csv.DictReader(open(table)))
+    ok = [r for r in rows if r["status"] == "ok"]
+    print(f"{folder}: {len(ok)}/{len(rows)} ok")
+    for k in ["psi", "delta1", "delta2", "theta1", "theta2"]:
+        errs, pulls = [], []
+        for r in ok:
+            tv, mv = truth[r["file"]][f"{k}_deg"], r[f"{k}_deg"]
+            if tv == "" or mv == "":
+                continue
+            e = angle_error(float(mv), float(tv))
+            errs.append(e)
+            if r[f"{k}_err_deg"]:
+                pulls.append(e / float(r[f"{k}_err_deg"]))
+        if not errs:
+            print(f"  {k:7s} no measured values")
+            continue
+        errs.sort()
+        p90 = errs[int(round(0.9 * (len(errs) - 1)))]
+        ratio = statistics.median(pulls) / 0.6745 if pulls else float("nan")
+        print(f"  {k:7s} n {len(errs):3d}  median {statistics.median(errs):.3f}  p90 {p90:.3f}  sigma ratio {ratio:.2f}")
+
+
+args = sys.argv[1:]
+if len(args) < 2 or len(args) % 2:
+    sys.exit(__doc__)
+for folder, table in zip(args[::2], args[1::2]):
+    report(folder, table)
