@@ -48,6 +48,9 @@ pub struct SpeedErrorArgs {
     /// Stages to run (comma-separated subset of extract,theory,fit).
     #[arg(long, default_value = "extract,theory,fit")]
     pub stages: String,
+    /// Only redraw the plot from OUT/speed_error.csv (no measurement).
+    #[arg(long)]
+    pub replot: bool,
 }
 
 /// One row of `speed_error.csv`.
@@ -396,17 +399,68 @@ pub fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
     crate::table::write_frame_atomic(path, crate::table::TableFormat::Csv, &mut df)
 }
 
-/// Pareto plot: log10 seconds per item against log10 median error, one panel per stage.
-pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
-    use crate::report::plot::{
-        Dash, DataPoint, Figure, LegendAt, Line, Marker, Note, Panel, Points,
+/// Reads a `speed_error.csv` written by [`write_csv`] (to redraw its plot).
+pub fn read_csv(path: &Path) -> Result<Vec<BenchRow>> {
+    use polars::prelude::DataType;
+    let df = crate::table::read_frame(path)?;
+    let f = |name: &str| -> Result<Vec<f64>> {
+        let c = Context::with_context(df.column(name), || {
+            format!("{}: no column '{name}'", path.display())
+        })?;
+        let c = c.cast(&DataType::Float64)?;
+        let ca = c.f64()?;
+        Ok((0..ca.len())
+            .map(|i| ca.get(i).unwrap_or(f64::NAN))
+            .collect())
     };
+    let st = |name: &str| -> Result<Vec<String>> {
+        let c = Context::with_context(df.column(name), || {
+            format!("{}: no column '{name}'", path.display())
+        })?;
+        let c = c.cast(&DataType::String)?;
+        let ca = c.str()?;
+        Ok((0..ca.len())
+            .map(|i| ca.get(i).unwrap_or_default().to_string())
+            .collect())
+    };
+    let (stage, setting, default, front) = (
+        st("stage")?,
+        st("setting")?,
+        st("is_default")?,
+        st("on_pareto_front")?,
+    );
+    let (secs, med, p90, ok, n) = (
+        f("seconds_per_item")?,
+        f("median_err_deg")?,
+        f("p90_err_deg")?,
+        f("ok_fraction")?,
+        f("n_items")?,
+    );
+    Ok((0..df.height())
+        .map(|i| BenchRow {
+            stage: stage[i].clone(),
+            setting: setting[i].clone(),
+            is_default: default[i] == "true",
+            seconds_per_item: secs[i],
+            median_err_deg: med[i],
+            p90_err_deg: p90[i],
+            ok_fraction: ok[i],
+            n_items: n[i] as usize,
+            on_pareto_front: front[i] == "true",
+        })
+        .collect())
+}
+
+/// Pareto plot: log10 seconds per item against log10 median error, one panel per stage with a
+/// positive error (the theory's closed forms are exact: that stage is in the CSV only).
+pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
+    use crate::report::plot::{DataPoint, Figure, LegendAt, Marker, Note, Panel, Points};
     use plotters::style::RGBColor;
     let mut panels = Vec::new();
     for stage in ["extract", "theory", "fit"] {
         let rs: Vec<&BenchRow> = rows
             .iter()
-            .filter(|r| r.stage == stage && r.median_err_deg > 0.0)
+            .filter(|r| r.stage == stage && r.median_err_deg > 0.0 && r.seconds_per_item > 0.0)
             .collect();
         if rs.is_empty() {
             continue;
@@ -427,28 +481,29 @@ pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
             "log10 seconds per item",
             format!("log10 {unit}"),
         );
-        let mut front: Vec<&BenchRow> = rs.iter().copied().filter(|r| r.on_pareto_front).collect();
-        front.sort_by(|a, b| a.seconds_per_item.total_cmp(&b.seconds_per_item));
-        panel.lines.push(
-            Line::new("Pareto front", RGBColor(120, 120, 120), Dash::Dashed).with_samples(
-                front.iter().map(|r| {
-                    (
-                        r.seconds_per_item.log10(),
-                        Some(r.median_err_deg.log10()),
-                        false,
-                    )
-                }),
-            ),
-        );
+        let group = |front: bool, default: bool| -> Vec<DataPoint> {
+            rs.iter()
+                .filter(|r| r.on_pareto_front == front && r.is_default == default)
+                .map(|r| pt(r))
+                .collect()
+        };
         panel.points.push(Points {
-            label: Some("settings".into()),
-            points: rs.iter().filter(|r| !r.is_default).map(|r| pt(r)).collect(),
-            color: RGBColor(40, 90, 170),
+            label: Some("on the Pareto front".into()),
+            points: group(true, false),
+            color: RGBColor(30, 140, 60),
             marker: Marker::Circle,
         });
         panel.points.push(Points {
+            label: Some("dominated".into()),
+            points: group(false, false),
+            color: RGBColor(40, 90, 170),
+            marker: Marker::Cross,
+        });
+        let mut default = group(true, true);
+        default.extend(group(false, true));
+        panel.points.push(Points {
             label: Some("default".into()),
-            points: rs.iter().filter(|r| r.is_default).map(|r| pt(r)).collect(),
+            points: default,
             color: RGBColor(200, 40, 40),
             marker: Marker::Square,
         });
@@ -460,12 +515,24 @@ pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
                 color: RGBColor(60, 60, 60),
             });
         }
+        let (xs, ys): (Vec<f64>, Vec<f64>) = rs.iter().map(|r| (pt(r).x, pt(r).y)).unzip();
+        let span = |v: &[f64], lo_pad: f64, hi_pad: f64| {
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                    (a.min(*x), b.max(*x))
+                });
+            let w = (hi - lo).max(0.2);
+            (lo - lo_pad * w, hi + hi_pad * w)
+        };
+        // Room on the right for the labels.
+        panel = panel.ranges(span(&xs, 0.1, 0.6), span(&ys, 0.15, 0.15));
         panel.legend = LegendAt::UpperRight;
-        panels.push(panel.auto_x(0.5).auto_y(0.5));
+        panels.push(panel);
     }
     Figure::new(
         "pareto",
-        "Speed against error for each stage's cost knobs (default in red).",
+        "Speed against error for each stage's cost knobs (default in red, Pareto front in green).",
         panels,
     )
 }
