@@ -299,7 +299,13 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
     }
     let angle = |a: f64, b: f64| ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs();
     let mut rows = Vec::new();
-    for (name, opts, is_default) in extract_settings() {
+    // The default is measured first and again last (the best time kept), so warm-up of the
+    // machine does not count against the setting every other one is compared with.
+    let mut settings = extract_settings();
+    if let Some(d) = settings.iter().find(|s| s.2).cloned() {
+        settings.push(d);
+    }
+    for (name, opts, is_default) in settings {
         let (mut errs, mut ok, mut secs) = (Vec::new(), 0usize, 0.0);
         for (img, plate, t) in &images {
             // Best of three runs: other load on the machine only ever adds time; the analysis
@@ -337,11 +343,16 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
                 }
             }
         }
+        let secs_per_item = secs / images.len().max(1) as f64;
+        if let Some(prev) = rows.iter_mut().find(|r: &&mut BenchRow| r.setting == name) {
+            prev.seconds_per_item = prev.seconds_per_item.min(secs_per_item);
+            continue;
+        }
         rows.push(BenchRow {
             stage: "extract".into(),
             setting: name,
             is_default,
-            seconds_per_item: secs / images.len().max(1) as f64,
+            seconds_per_item: secs_per_item,
             median_err_deg: quantile(&errs, 0.5),
             p90_err_deg: quantile(&errs, 0.9),
             ok_fraction: ok as f64 / images.len().max(1) as f64,
