@@ -342,18 +342,18 @@ mod extraction {
         ImageBuffer::<Rgb<u8>, _>::from_pixel(1, 400, Rgb([10, 60, 20]))
             .save(&p)
             .unwrap();
-        let e = image_io::load(&p)
-            .err()
-            .expect("a 1-pixel-wide image must not load");
+        let Err(e) = image_io::load(&p) else {
+            panic!("a 1-pixel-wide image must not load")
+        };
         assert!(e.contains("too small"), "{e}");
         let (png, _) = synth_shot(&d.join("set"));
         let jpg = d.join("cut.jpg");
         image::open(&png).unwrap().to_rgb8().save(&jpg).unwrap();
         let bytes = std::fs::read(&jpg).unwrap();
         std::fs::write(&jpg, &bytes[..bytes.len() / 3]).unwrap();
-        let e = image_io::load(&jpg)
-            .err()
-            .expect("a truncated JPEG must not load");
+        let Err(e) = image_io::load(&jpg) else {
+            panic!("a truncated JPEG must not load")
+        };
         assert!(e.contains("truncated JPEG"), "{e}");
         // The complete file still loads.
         std::fs::write(&jpg, &bytes).unwrap();
