@@ -12,6 +12,7 @@ pub mod bench;
 pub mod cli;
 pub mod extract;
 pub mod fit;
+pub mod io;
 pub mod physics;
 pub mod pipeline;
 pub mod predict;

@@ -3,7 +3,7 @@
 use super::{Criterion, FitOptions, FitOutput, Loss, MaterialFit, Model, ResidualRow, SpinMode};
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::table::{TableFormat, read_angle_table, write_frame_atomic};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use polars::prelude::{Column, DataFrame};
 use std::path::{Path, PathBuf};
@@ -162,20 +162,7 @@ pub fn summary_line(f: &MaterialFit) -> String {
     line
 }
 
-/// Writes bytes atomically (temp file in the same folder, then rename).
-pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write '{}'", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot rename to '{}'", path.display()))
-}
+pub use crate::io::write_atomic as write_bytes_atomic;
 
 fn fail(e: anyhow::Error) -> CliError {
     CliError::Failed(e)

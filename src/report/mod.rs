@@ -446,16 +446,7 @@ pub fn write_report(input: &ReportInput, dir: &Path) -> Result<ReportOutput> {
     })
 }
 
-/// Writes `bytes` to a temporary file beside `path` and renames it over `path`.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
-}
+pub use crate::io::write_atomic;
 
 #[cfg(test)]
 mod tests {

@@ -866,16 +866,14 @@ pub fn run(args: &SynthArgs) -> CliResult {
             Some(folder.plate_seed),
         );
         let bytes = encode(&plate, ImgFormat::Png, 95)?;
-        truth::write_atomic(&out.join(BACKGROUND_FILE), &bytes).map_err(anyhow::Error::from)?;
+        truth::write_atomic(&out.join(BACKGROUND_FILE), &bytes)?;
     }
     let scene = scene_config(args, &folder);
     truth::write_atomic(
         &out.join(crate::scene::SCENE_FILE),
         scene.to_toml_string().as_bytes(),
-    )
-    .map_err(anyhow::Error::from)?;
-    truth::write_atomic(&out.join("truth.csv"), truth::to_csv(&rows).as_bytes())
-        .map_err(anyhow::Error::from)?;
+    )?;
+    truth::write_atomic(&out.join("truth.csv"), truth::to_csv(&rows).as_bytes())?;
     eprintln!(
         "wrote {} {} images, scene.toml and truth.csv to {}",
         rows.len(),

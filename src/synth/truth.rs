@@ -12,9 +12,6 @@
 //! `streak_contrast_grey` is the noise-free luma contrast of the incoming cue-ball streak's centre
 //! line over the empty cloth (median along the streak).
 
-use std::io::Write;
-use std::path::Path;
-
 /// Column names of `truth.csv`, in order.
 pub const COLUMNS: [&str; 34] = [
     "file",
@@ -160,20 +157,7 @@ pub fn to_csv(rows: &[TruthRow]) -> String {
     s
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same folder, then rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp"));
-    {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, path)
-}
+pub use crate::io::write_atomic;
 
 /// Parses a `truth.csv` written by [`to_csv`] into rows of (column → cell). Intended for tests and
 /// tools; handles the quoting [`to_csv`] produces.
