@@ -109,8 +109,14 @@ pub fn predict_rows(args: &PredictArgs) -> Result<Vec<PredictRow>, CliError> {
 pub fn run(args: &PredictArgs) -> CliResult {
     let rows = predict_rows(args)?;
     if args.json {
+        // One angle: exactly the four angles and the regime (the contract); a range: an
+        // array whose objects also carry psi_deg.
         let json = if rows.len() == 1 {
-            serde_json::to_string_pretty(&rows[0])
+            let mut v = serde_json::to_value(&rows[0]).map_err(anyhow::Error::from)?;
+            if let Some(o) = v.as_object_mut() {
+                o.remove("psi_deg");
+            }
+            serde_json::to_string_pretty(&v)
         } else {
             serde_json::to_string_pretty(&rows)
         };

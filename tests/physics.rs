@@ -506,7 +506,6 @@ fn predict_prints_json_with_exactly_the_documented_keys() {
         [
             "delta1_deg",
             "delta2_deg",
-            "psi_deg",
             "regime",
             "theta1_deg",
             "theta2_deg"
