@@ -488,21 +488,26 @@ mod tests {
         assert!((mid - 2.0 * 12.0 / len * 0.1).abs() < 1e-3, "{mid}");
     }
 
-    #[test]
-    fn base_plate_equals_pixelwise_base() {
-        let bd = Backdrop {
-            width: 200,
-            height: 30,
+    /// A dim green table with gradient, vignette and Poisson–Gaussian noise parameters.
+    fn test_backdrop(width: u32, height: u32, texture: f32, texture_seed: u64) -> Backdrop {
+        Backdrop {
+            width,
+            height,
             cloth_rgb: [0.05, 0.2, 0.08],
-            texture: 0.08,
-            texture_seed: 11,
+            texture,
+            texture_seed,
             lamp: 300.0,
             gradient: [0.1, -0.05],
             vignette: 0.2,
             light: [-0.3, -0.4, 1.0],
             noise_a: 0.5,
             noise_b: 4.0,
-        };
+        }
+    }
+
+    #[test]
+    fn base_plate_equals_pixelwise_base() {
+        let bd = test_backdrop(200, 30, 0.08, 11);
         let plate = bd.base_plate();
         for y in 0..30 {
             for x in 0..200 {
@@ -514,19 +519,7 @@ mod tests {
 
     #[test]
     fn rendering_is_deterministic_and_noise_free_matches_expected() {
-        let bd = Backdrop {
-            width: 64,
-            height: 40,
-            cloth_rgb: [0.05, 0.2, 0.08],
-            texture: 0.05,
-            texture_seed: 3,
-            lamp: 300.0,
-            gradient: [0.1, -0.05],
-            vignette: 0.2,
-            light: [-0.3, -0.4, 1.0],
-            noise_a: 0.5,
-            noise_b: 4.0,
-        };
+        let bd = test_backdrop(64, 40, 0.05, 3);
         let frame = Frame {
             segments: vec![Segment {
                 a: [0.0, 20.0],
