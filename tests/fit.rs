@@ -337,9 +337,100 @@ fn estimates_per_shot_spin_with_the_coefficients() {
         f.model, f.spin_estimated, f.e, f.mu
     );
     assert!(n >= 70, "only {n} shots determined their spin");
-    // Issue 8 asks for 90%. Measured: 70 of 80 (87.5%). Four of these 80 shots are truly in
-    // s–mu (stun/draw with English against the cut); with free (r, s) a mu–mu shot mimics them,
-    // BIC keeps mu–mu, mu comes out 0.075 (truth 0.07) and the English of nearly-stun shots
-    // shifts to absorb it. This asserts the measured level so a regression shows.
-    assert!(ok as f64 >= 0.85 * n as f64, "{ok} of {n}");
+    // Issue 8: r within its stated 2 sigma in at least 90 % of shots (measured: 76 of 80).
+    assert!(ok as f64 >= 0.9 * n as f64, "{ok} of {n}");
+    // The ambiguous shots say so.
+    assert!(
+        out.residuals
+            .iter()
+            .filter_map(|r| r.spin_reason.as_deref())
+            .all(|w| w.contains("ambiguous")
+                || w.contains("not determined")
+                || w.contains("minima")),
+        "unexpected reasons"
+    );
+}
+
+/// Issue 8: spin coverage over ten seeds (80 billiard shots each, mixed follow/stun/draw with
+/// English, spin unknown to the fit): e and mu within 0.01 in every seed, each shot's r within
+/// its stated 2 sigma in at least 90 % of all shots (measured: 772 of 800, 96.5 %).
+#[test]
+fn spin_coverage_over_seeds() {
+    let [(_, billiard), _, _] = paper_materials();
+    let opts = FitOptions {
+        spin: SpinMode::Estimate,
+        bootstrap: 0,
+        ..FitOptions::default()
+    };
+    let (mut ok, mut n, mut worst_e, mut worst_mu) = (0, 0, 0.0f64, 0.0f64);
+    let mut errs: Vec<f64> = Vec::new();
+    for seed in 0..10u64 {
+        let mut s = spec("billiard", billiard, 80, 100 + seed);
+        s.psi_lo_deg = 15.0;
+        s.psi_hi_deg = 65.0;
+        s.spin = SyntheticSpin::Mixed {
+            r_lo: -1.0,
+            r_hi: 1.5,
+            s_max: 0.3,
+            write: false,
+        };
+        let (rows, truth) = synthetic_table(&s);
+        let out = fit_materials(&rows, &opts).unwrap();
+        let f = &out.fits[0];
+        worst_e = worst_e.max((f.e.unwrap() - 0.97).abs());
+        worst_mu = worst_mu.max((f.mu.unwrap() - 0.07).abs());
+        let (mut ok_s, mut n_s) = (0, 0);
+        for r in out.residuals.iter().filter(|r| r.used) {
+            let i: usize = r.file.trim_start_matches("synthetic_").parse().unwrap();
+            if let (Some(est), Some(err)) = (r.spin_est, r.spin_err) {
+                n_s += 1;
+                errs.push(err);
+                let shot = streakfit::physics::Shot {
+                    psi: truth[i][0].to_radians(),
+                    mass_ratio: 1.0,
+                    spin: truth[i][1],
+                    english: truth[i][2],
+                };
+                let reg = streakfit::physics::regime::select_regime(&shot, &billiard);
+                if (est - truth[i][1]).abs() <= 2.0 * err {
+                    ok_s += 1;
+                } else {
+                    eprintln!(
+                        "  seed {seed} {}: psi {:.1} r {:+.3} s {:+.3} ({}) est r {est:+.3} ± {err:.3} s {:?} ± {:?} ({:?})",
+                        r.file,
+                        truth[i][0],
+                        truth[i][1],
+                        truth[i][2],
+                        reg.name(),
+                        r.english_est,
+                        r.english_err,
+                        r.regime_est
+                    );
+                }
+            }
+        }
+        eprintln!(
+            "seed {seed}: model {} e {:.4} mu {:.4}; spin within 2 sigma {ok_s} of {n_s}; undetermined {}",
+            f.model,
+            f.e.unwrap(),
+            f.mu.unwrap(),
+            f.spin_undetermined
+        );
+        ok += ok_s;
+        n += n_s;
+    }
+    errs.sort_by(f64::total_cmp);
+    eprintln!(
+        "all seeds: {ok} of {n} ({:.1} %); worst |e error| {worst_e:.4}, |mu error| {worst_mu:.4}; \
+         r error median {:.3}, 90th percentile {:.3}",
+        100.0 * ok as f64 / n as f64,
+        errs[errs.len() / 2],
+        errs[errs.len() * 9 / 10]
+    );
+    assert!(
+        worst_e < 0.01 && worst_mu < 0.01,
+        "e {worst_e} mu {worst_mu}"
+    );
+    assert!(n >= 760, "only {n} of 800 shots determined their spin");
+    assert!(ok as f64 >= 0.9 * n as f64, "{ok} of {n}");
 }

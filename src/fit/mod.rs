@@ -6,7 +6,12 @@
 //! ([`crate::physics::closed::angles`]) at the shot's *true* `psi_i`, a latent parameter
 //! (errors-in-variables). Missing uncertainties default to [`FitOptions::default_sigma_deg`].
 //! Spin `r = R omega/v`, English `s = R omega_z/v`: known (table, or rolling `r = 1, s = 0` as in
-//! the paper's track experiments) or estimated per shot ([`SpinMode`]).
+//! the paper's track experiments) or estimated per shot ([`SpinMode`]). Estimated spin: a shot
+//! whose assigned ball–ball state is physically impossible at its fitted spin (gross slip where
+//! even `mu0 = mu` would stick) is moved to the other state and the fit repeated; each shot's
+//! `r, s` errors come from its profile likelihood, widened to cover the other contact state when
+//! that fits as well (see [`spin`]); a component whose profile stays flat over the prior's width
+//! is reported as `null` with the reason.
 //!
 //! Candidate models ([`Model`]): a single regime for every shot (`mu-mu`, `s-mu`, `mu-s`, `s-s`,
 //! with `e, mu, mu'` free) and the two-regime switch (`two-regime`): the ball–ball contact sticks
@@ -36,6 +41,7 @@
 pub mod cli;
 pub mod problem;
 pub mod solver;
+pub mod spin;
 pub mod synthetic;
 
 use crate::physics::Regime;
@@ -567,12 +573,6 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
     }
 }
 
-/// Grid of spin `r` for re-seeding: `[-2, 3]` in steps of 0.25; English `s`: `[-1, 1]`, 0.2
-/// (the least squares refines from there).
-fn spin_grid() -> impl Iterator<Item = (f64, f64)> {
-    (0..=20).flat_map(|a| (0..=10).map(move |b| (-2.0 + 0.25 * a as f64, -1.0 + 0.2 * b as f64)))
-}
-
 /// Each estimated-spin shot moved to its best `(r, s)` grid point if that beats its current
 /// locals (globals and psi held).
 fn reseed_spin(p: &Problem, st: &State) -> State {
@@ -585,7 +585,7 @@ fn reseed_spin(p: &Problem, st: &State) -> State {
                 return cur;
             }
             let mut best = (p.shot_cost(i, &st.g, &cur).0, cur);
-            for (r, s) in spin_grid() {
+            for (r, s) in spin::spin_grid() {
                 let l = [cur[0], r, s];
                 let c = p.shot_cost(i, &st.g, &l).0;
                 if c < best.0 {
@@ -596,35 +596,6 @@ fn reseed_spin(p: &Problem, st: &State) -> State {
         })
         .collect();
     State { g: st.g, l }
-}
-
-/// Profile-based 1-sigma of a shot's `(r, s)`: a quarter of the extent (padded by half a grid
-/// step) of the region with `Δchi² ≤ 4`, on a grid of `r̂ ± 1.5` (step 0.15) by
-/// `s ∈ [-1, 1]` (step 0.2) with the globals and psi held. It catches the non-quadratic,
-/// multi-modal likelihood of weakly determined English, where the curvature at the optimum
-/// understates the error.
-fn spin_profile_errors(p: &Problem, g: &[f64; NG], i: usize, l: &[f64; NL]) -> (f64, f64) {
-    let c0 = p.shot_cost(i, g, l).0;
-    let (mut rlo, mut rhi, mut slo, mut shi) = (l[1], l[1], l[2], l[2]);
-    let mut cmin = c0;
-    let mut pts = Vec::with_capacity(21 * 11);
-    for a in 0..=20 {
-        for b in 0..=10 {
-            let (r, s) = (l[1] - 1.5 + 0.15 * a as f64, -1.0 + 0.2 * b as f64);
-            let c = p.shot_cost(i, g, &[l[0], r, s]).0;
-            cmin = cmin.min(c);
-            pts.push((r, s, c));
-        }
-    }
-    for (r, s, c) in pts {
-        if c - cmin <= 4.0 {
-            rlo = rlo.min(r - 0.075);
-            rhi = rhi.max(r + 0.075);
-            slo = slo.min(s - 0.1);
-            shi = shi.max(s + 0.1);
-        }
-    }
-    ((rhi - rlo) / 4.0, (shi - slo) / 4.0)
 }
 
 /// Two-regime model: profile chi² over the stick/slip partition ordered by each shot's critical
@@ -905,11 +876,80 @@ fn fit_material(
     }
     let chosen = choose(&fits, &shots, opts.criterion);
     let scores: Vec<ModelScore> = fits.iter().map(|f| score(f, &shots)).collect();
-    let f = fits[chosen].clone();
+    let mut f = fits[chosen].clone();
+    let moved = refine_regimes(&shots, &mut f, opts);
     let bootstrap = (opts.bootstrap > 0).then(|| bootstrap(&shots, &f, opts));
-    Ok(summarise(
+    let (mut fit, res) = summarise(
         material, rows, &shots, &f, scores, bootstrap, rejected, n_skipped, opts,
-    ))
+    );
+    if moved > 0 {
+        fit.notes.push(format!(
+            "{moved} estimated-spin shots moved to the other ball–ball contact state by the \
+             stick/slip condition at their spin (static friction mu0 ≥ mu: the contact sticks \
+             where even mu0 = mu would hold it); regime_est gives each shot's state"
+        ));
+    }
+    Ok((fit, res))
+}
+
+/// Ball–ball contact state of each estimated-spin shot from the stick/slip condition.
+///
+/// With free spin, a shot can often be reproduced in either contact state, so the model's
+/// assignment can be physically impossible (gross slip where even `mu0 = mu` would stick, see
+/// [`spin::admissible`]); such shots bias `mu`. A shot whose state is impossible moves to the
+/// other state when that one is possible (locals refitted, globals held), then the whole
+/// problem is refitted with the per-shot states; at most 3 rounds. Returns the number of shots
+/// whose state differs from the model's.
+fn refine_regimes(shots: &[ShotData], f: &mut ModelFit, opts: &FitOptions) -> usize {
+    use rayon::prelude::*;
+    if !shots.iter().any(|s| s.estimate_spin) {
+        return 0;
+    }
+    let huber = match opts.loss {
+        Loss::Squared => None,
+        Loss::Huber(k) => Some(k),
+    };
+    let original = f.regimes.clone();
+    for _ in 0..3 {
+        let g = f.sol.state.g;
+        let changes: Vec<Option<(Regime, [f64; NL])>> = (0..shots.len())
+            .into_par_iter()
+            .map(|i| {
+                let s = &shots[i];
+                if !s.estimate_spin {
+                    return None;
+                }
+                let (reg, l) = (f.regimes[i], f.sol.state.l[i]);
+                // Only the physics moves a shot: between two admissible states the chi²
+                // difference of mimicking spins is mostly noise (measured: choosing by chi²
+                // moved true gross-slip shots to stick and biased mu by a further +0.001).
+                if spin::admissible(reg, &l, &g) {
+                    return None;
+                }
+                let (areg, al, _) = spin::alternative(s, reg, &g, huber);
+                spin::admissible(areg, &al, &g).then_some((areg, al))
+            })
+            .collect();
+        if changes.iter().all(Option::is_none) {
+            break;
+        }
+        let mut regimes = f.regimes.clone();
+        let mut l = f.sol.state.l.clone();
+        for (i, c) in changes.into_iter().enumerate() {
+            if let Some((r, li)) = c {
+                regimes[i] = r;
+                l[i] = li;
+            }
+        }
+        let sol = problem(shots, regimes.clone(), f.model, opts).solve(State { g, l }, MAX_ITER);
+        f.regimes = regimes;
+        f.sol = sol;
+    }
+    f.regimes
+        .iter()
+        .zip(&original)
+        .filter(|(a, b)| a != b)
+        .count()
 }
 
 /// Self-consistency of a fit: the table contact of each shot must be in the state its regime
@@ -1139,9 +1179,39 @@ fn summarise(
     let mut res_rows = Vec::new();
     let mut resid: [Vec<f64>; 5] = Default::default();
     let (mut n_known, mut n_est, mut n_undet) = (0, 0, 0);
+    // Estimated spin: profile intervals and regime hypotheses per shot (independent, parallel).
+    let ctx = spin::SpinContext {
+        g,
+        huber: prob.huber,
+        scale,
+    };
+    let spins: Vec<Option<spin::ShotSpin>> = {
+        use rayon::prelude::*;
+        (0..shots.len())
+            .into_par_iter()
+            .map(|i| {
+                shots[i].estimate_spin.then(|| {
+                    spin::shot_spin(
+                        &shots[i],
+                        f.regimes[i],
+                        f.sol.state.l[i],
+                        f.sol.local_var_cond[i],
+                        f.sol.local_var[i],
+                        &ctx,
+                    )
+                })
+            })
+            .collect()
+    };
+    let mut n_ambiguous = 0;
     for (i, s) in shots.iter().enumerate() {
-        let l = f.sol.state.l[i];
-        let pred = crate::physics::closed::angles(&s.shot(&l), &coeff, f.regimes[i]).as_array();
+        // The reported hypothesis (regime, locals) of an estimated-spin shot may differ from the
+        // global fit's; the fitted angles and residuals below are those of the reported one.
+        let (regime_i, l) = match &spins[i] {
+            Some(sp) => (sp.regime, sp.l),
+            None => (f.regimes[i], f.sol.state.l[i]),
+        };
+        let pred = crate::physics::closed::angles(&s.shot(&l), &coeff, regime_i).as_array();
         let row = &rows[s.row];
         let mut fit_deg = [None; 4];
         let mut res_deg = [None; 4];
@@ -1156,16 +1226,16 @@ fn summarise(
             }
         }
         resid[0].push((l[0] - s.psi_meas).to_degrees());
-        let var = f.sol.local_var[i];
         let (spin_source, spin_est, spin_err, english_est, english_err, spin_reason) =
-            if s.estimate_spin {
-                let (r_prof, s_prof) = spin_profile_errors(&prob, &g, i, &l);
-                let r_se = (var[1].sqrt() * scale).max(r_prof);
-                let s_se = (var[2].sqrt() * scale).max(s_prof);
-                // Undetermined: the data barely narrowed the wide prior.
+            if let Some(sp) = &spins[i] {
+                let (r_se, s_se) = (sp.r_err, sp.s_err);
+                // Undetermined: the interval is as wide as half the prior or more.
                 let r_ok = r_se.is_finite() && r_se < 0.5 * SPIN_PRIOR_SIGMA;
                 let s_ok = s_se.is_finite() && s_se < 0.5 * ENGLISH_PRIOR_SIGMA;
-                let mut why = Vec::new();
+                let mut why = sp.notes.clone();
+                if sp.notes.iter().any(|n| n.contains("ambiguous")) {
+                    n_ambiguous += 1;
+                }
                 if !r_ok {
                     why.push(format!(
                         "spin r not determined by the angles (error {r_se:.2})"
@@ -1208,7 +1278,7 @@ fn summarise(
             material: material.to_string(),
             file: row.file.clone(),
             model: f.model.name().to_string(),
-            regime_est: Some(f.regimes[i].name().to_string()),
+            regime_est: Some(regime_i.name().to_string()),
             used: true,
             rejected_reason: None,
             psi_deg: row.psi_deg,
@@ -1233,6 +1303,12 @@ fn summarise(
             english_err,
             spin_reason,
         });
+    }
+    if n_ambiguous > 0 {
+        notes.push(format!(
+            "{n_ambiguous} shots fit in either ball–ball contact state with different spin: \
+             their spin interval spans both (spin_reason)"
+        ));
     }
     for (&i, why) in &rejected {
         let row = &rows[i];

@@ -56,6 +56,9 @@ pub struct Solution {
     pub cov_g: Matrix4<f64>,
     /// Marginal variances of each shot's locals.
     pub local_var: Vec<[f64; NL]>,
+    /// Variances of each shot's locals with the globals held (`diag V_i⁻¹`); the difference to
+    /// [`Solution::local_var`] is what the globals' uncertainty adds.
+    pub local_var_cond: Vec<[f64; NL]>,
 }
 
 fn huber_rho(r: f64, k: Option<f64>) -> f64 {
@@ -376,6 +379,14 @@ impl Problem<'_> {
                 [0, 1, 2].map(|p| if free[p] { c[(p, p)] } else { 0.0 })
             })
             .collect();
+        let local_var_cond = vinvs
+            .iter()
+            .zip(&self.shots)
+            .map(|(vi, shot)| {
+                let free = shot.free_locals();
+                [0, 1, 2].map(|p| if free[p] { vi[(p, p)] } else { 0.0 })
+            })
+            .collect();
         Solution {
             state: st,
             cost,
@@ -384,6 +395,7 @@ impl Problem<'_> {
             converged,
             cov_g,
             local_var,
+            local_var_cond,
         }
     }
 }

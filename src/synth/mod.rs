@@ -18,6 +18,9 @@
 //!   head-on (`psi < 5°`) and grazing (`psi > 75°`) shots, a stray ball crossing the streaks,
 //!   the impact near the frame edge so paths leave early, JPEG.
 //!
+//! `--spin-modes rolling|mixed` overrides the tier's spin (e.g. a clean folder of one material
+//! with follow, stun, draw and English shots, for fitting unknown spin).
+//!
 //! Randomness: one ChaCha stream per folder draws the folder's table and one seed per shot; each
 //! shot draws everything else from its own stream, and each image band has its own noise stream,
 //! so output is byte-identical for a seed whatever the thread count.
@@ -81,6 +84,16 @@ impl Tier {
     }
 }
 
+/// How the cue ball's spin of each shot is drawn (`--spin-modes`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SpinModes {
+    /// Rolling cue ball, `r = 1, s = 0` (the paper's track experiments).
+    Rolling,
+    /// One of rolling (`r = 1`), follow (`r ∈ [1, 1.6)`), stun (`|r| < 0.1`) or draw
+    /// (`r ∈ [-1.2, -0.3)`), equally likely, with English `s ∈ [-0.4, 0.4)` in 40 % of shots.
+    Mixed,
+}
+
 /// Image file format of the shots.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ImgFormat {
@@ -114,6 +127,10 @@ pub struct SynthArgs {
     /// Sidespin range A:B of s = R omega_z / v at impact (uniform).
     #[arg(long, allow_hyphen_values = true)]
     pub english: Option<String>,
+    /// Cue-ball spin modes in the folder: rolling, or mixed follow/stun/draw with English
+    /// [default: rolling for clean, mixed otherwise]. --spin/--english ranges override.
+    #[arg(long, value_enum)]
+    pub spin_modes: Option<SpinModes>,
     /// Image format [default: png for clean, jpg otherwise].
     #[arg(long, value_enum)]
     pub format: Option<ImgFormat>,
@@ -146,6 +163,7 @@ impl SynthArgs {
             psi: None,
             spin: None,
             english: None,
+            spin_modes: None,
             format: None,
             size: "2400x1600".into(),
             background: false,
@@ -383,8 +401,15 @@ pub fn plan(args: &SynthArgs, mats: &Materials) -> Result<FolderPlan, String> {
                 _ => r.gen_range(5.0..75.0),
             },
         };
-        // Follow, stun, draw and plain rolling, sometimes with English, beyond the clean tier.
-        let (spin, english) = if tier == Tier::Clean {
+        // Follow, stun, draw and plain rolling, sometimes with English, beyond the clean tier
+        // (or wherever asked for). The draws stay where they were, so a seed's folder without
+        // --spin-modes is unchanged.
+        let modes = args.spin_modes.unwrap_or(if tier == Tier::Clean {
+            SpinModes::Rolling
+        } else {
+            SpinModes::Mixed
+        });
+        let (spin, english) = if tier == Tier::Clean && modes == SpinModes::Rolling {
             (1.0, 0.0)
         } else {
             let spin = match r.gen_range(0..4) {
@@ -398,7 +423,11 @@ pub fn plan(args: &SynthArgs, mats: &Materials) -> Result<FolderPlan, String> {
             } else {
                 0.0
             };
-            (spin, english)
+            if modes == SpinModes::Rolling {
+                (1.0, 0.0)
+            } else {
+                (spin, english)
+            }
         };
         let spin = spin_range.map_or(spin, |rg| uniform(&mut r, rg));
         let english = english_range.map_or(english, |rg| uniform(&mut r, rg));
