@@ -1,5 +1,5 @@
 //! Fit speed: 1,000 synthetic shots (steel, the two-regime case: every candidate model plus the
-//! threshold profile), with and without the bootstrap; and 1,000 shots with estimated spin.
+//! threshold profile), with and without the bootstrap; and 30 to 1,000 shots with estimated spin.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -42,12 +42,16 @@ fn bench(c: &mut Criterion) {
         g.bench_function(format!("billiard_mu_mu_{n}_shots"), |b| {
             b.iter(|| fit_materials(black_box(&rows_b), &fixed).unwrap())
         });
-        let spin = FitOptions {
-            model: Some("mu-mu".parse().unwrap()),
-            spin: SpinMode::Estimate,
-            bootstrap: 0,
-            ..FitOptions::default()
-        };
+    }
+    // Estimated spin (latent r, s per shot, profile intervals, regime hypotheses): the cost
+    // must grow linearly with the number of shots.
+    let spin = FitOptions {
+        model: Some("mu-mu".parse().unwrap()),
+        spin: SpinMode::Estimate,
+        bootstrap: 0,
+        ..FitOptions::default()
+    };
+    for n in [30, 100, 300, 1000] {
         let rows_s = table(
             0,
             n,
