@@ -291,35 +291,89 @@ struct Reading {
     x0: Vec<f64>,
 }
 
-fn initial_path(
+/// Starts for one outgoing path `(delta, theta, L0, L1)`: the rolling line from the far two thirds
+/// of the samples, and the sliding arc among a few candidates (arcs from `start` turning by
+/// 15°–89° onto the rolling line and ending before the first sample, and the chord to the first
+/// samples) that fits the samples best; second, the chord start alone. Where the arc is hidden
+/// (near the impact) the turning arcs leave the samples on the rolling line, which keeps the fit
+/// in the right valley; the joint fit is run from both starts and keeps the better.
+fn path_starts(
     samples: &[Sample],
     start: (f64, f64),
     alpha: f64,
     r: f64,
-) -> Option<(f64, f64, f64, f64)> {
+) -> Option<[(f64, f64, f64, f64); 2]> {
     let n = samples.len();
     let far = fit_line(&samples[n / 3..])?;
     let theta = wrap(far.d.1.atan2(far.d.0) - alpha);
+    let u1 = far.d;
+    let mut cands: Vec<(f64, f64, f64, f64)> = vec![(theta, theta, r, r)];
     // Start tangent from the chord to the first few samples.
     let k = (n / 10).clamp(1, 8);
     let (mx, my) = samples[..k].iter().fold((0.0, 0.0), |a, s| {
         (a.0 + s.x / k as f64, a.1 + s.y / k as f64)
     });
     let delta = wrap((my - start.1).atan2(mx - start.0) - alpha);
-    // Control point: intersection of the start tangent with the rolling line.
     let u0 = ((alpha + delta).cos(), (alpha + delta).sin());
-    let den = u0.0 * far.d.1 - u0.1 * far.d.0;
-    let mut l0 = r;
-    let mut l1 = r;
+    let den = u0.0 * u1.1 - u0.1 * u1.0;
     if den.abs() > 1e-3 {
         let (qx, qy) = (far.p.0 - start.0, far.p.1 - start.1);
-        let t = (qx * far.d.1 - qy * far.d.0) / den;
+        let t = (qx * u1.1 - qy * u1.0) / den;
         if t > 0.2 * r && t < 20.0 * r {
-            l0 = t;
-            l1 = t;
+            cands.push((delta, theta, t, t));
         }
     }
-    Some((delta, theta, l0, l1))
+    // Arcs onto the rolling line: in line coordinates the start is at (s_p, h), the control
+    // point on the line at s_c = s_p + |h| / tan(turn), the arc's end at s_c + L1.
+    let along = |x: f64, y: f64| (x - far.p.0) * u1.0 + (y - far.p.1) * u1.1;
+    let h = u1.0 * (start.1 - far.p.1) - u1.1 * (start.0 - far.p.0);
+    let s_p = along(start.0, start.1);
+    let s_first = along(samples[0].x, samples[0].y);
+    if h.abs() > 0.01 * r {
+        for turn_deg in [15.0f64, 30.0, 45.0, 60.0, 75.0, 89.0] {
+            let turn = turn_deg.to_radians();
+            let s_c = s_p + h.abs() / turn.tan();
+            let l0 = h.abs() / turn.sin();
+            let l1 = l0.min(s_first - s_c - 0.05 * r);
+            if l1 <= 0.05 * r {
+                continue;
+            }
+            let c = (
+                far.p.0 + s_c * u1.0 - 0.0,
+                far.p.1 + s_c * u1.1,
+            );
+            let d0 = wrap((c.1 - start.1).atan2(c.0 - start.0) - alpha);
+            cands.push((d0, theta, l0, l1));
+        }
+    }
+    let cost = |c: &(f64, f64, f64, f64)| -> f64 {
+        let g = pathfit::PathGeom::new(
+            pathfit::PathModel::ParabolaLine,
+            start,
+            alpha,
+            &[c.0, c.1, c.2 - 0.5, c.3 - 0.5],
+        );
+        samples
+            .iter()
+            .map(|s| (g.signed_distance((s.x, s.y)) / s.sigma.max(0.05)).powi(2).min(1e4))
+            .sum()
+    };
+    let chord = cands[cands.len().min(2) - 1];
+    let best = cands
+        .into_iter()
+        .map(|c| (cost(&c), c))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, c)| c)?;
+    Some([best, chord])
+}
+
+fn initial_path(
+    samples: &[Sample],
+    start: (f64, f64),
+    alpha: f64,
+    r: f64,
+) -> Option<(f64, f64, f64, f64)> {
+    path_starts(samples, start, alpha, r).map(|s| s[0])
 }
 
 fn read_scene(
@@ -675,7 +729,52 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         line_only: opts.path_models == PathModels::LineOnly,
         ..opts.fit
     };
-    let Some(fit) = pathfit::fit(&pb, &reading.x0, &settings) else {
+    // Path starts from the re-measured samples (longer and cleaner than the scene reading's).
+    let starts: Vec<Vec<f64>> = {
+        // Impact geometry first, from the re-measured incoming line alone (the arcs are built
+        // on it: a start whose arcs do not meet this P leaves the joint fit in a curved valley).
+        let mut x0 = reading.x0.clone();
+        if let Some(li) = fit_line(&pb.incoming) {
+            let u = (-li.d.0, -li.d.1);
+            if let Some(p) = contact_point(li.p, u, o, r, 1.15) {
+                let alpha = (o.1 - p.1).atan2(o.0 - p.0);
+                let psi_s = wrap(u.1.atan2(u.0) - alpha);
+                if psi_s.abs() < 89.9f64.to_radians() {
+                    x0[3] = alpha;
+                    x0[4] = psi_s;
+                }
+            }
+        }
+        let alpha = x0[3];
+        let p_imp = (o.0 - 2.0 * r * alpha.cos(), o.1 - 2.0 * r * alpha.sin());
+        let s2 = path_starts(&pb.out2, o, alpha, r);
+        let s1 = pb.out1.as_ref().map(|v| path_starts(v, p_imp, alpha, r));
+        (0..2)
+            .filter_map(|k| {
+                let mut x = x0[..5].to_vec();
+                match &s1 {
+                    Some(Some(s)) => x.extend_from_slice(&[s[k].0, s[k].1, s[k].2, s[k].3]),
+                    Some(None) => return None,
+                    None => {}
+                }
+                let s = s2?[k];
+                x.extend_from_slice(&[s.0, s.1, s.2, s.3]);
+                Some(x)
+            })
+            .collect()
+    };
+    let starts = if starts.is_empty() {
+        vec![reading.x0.clone()]
+    } else {
+        starts
+    };
+    let fit = starts
+        .iter()
+        .enumerate()
+        .filter(|(k, x)| *k == 0 || **x != starts[0])
+        .filter_map(|(_, x)| pathfit::fit(&pb, x, &settings))
+        .min_by(|a, b| a.bic.total_cmp(&b.bic));
+    let Some(fit) = fit else {
         out.reason = "path fit failed (too few consistent centre-line points)".into();
         return out;
     };
