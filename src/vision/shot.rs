@@ -378,6 +378,7 @@ fn initial_path(
 
 fn read_scene(
     streaks: &[Vec<Sample>],
+    likeness: &[f64],
     o: (f64, f64),
     r: f64,
     cue_stopped: bool,
@@ -403,12 +404,18 @@ fn read_scene(
                 continue;
             }
             let Some(l2) = lines[b2] else { continue };
-            let Some((d2, t2, l02, l12)) = initial_path(&streaks[b2], o, alpha, r) else {
+            let Some((d2, _, l02, l12)) = initial_path(&streaks[b2], o, alpha, r) else {
                 continue;
             };
+            // The direction check uses the robust line through all samples (a track that wanders
+            // off at its far end must not turn the object ball around).
+            let t2 = wrap(l2.d.1.atan2(l2.d.0) - alpha);
             // The object ball's rolling line passes close to its start O.
             let miss2 = (l2.d.0 * (o.1 - l2.p.1) - l2.d.1 * (o.0 - l2.p.0)).abs();
             if t2.abs() > 35f64.to_radians() || miss2 > 1.5 * r {
+                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                    eprintln!("inc {inc} b2 {b2}: t2 {:.1}° miss2 {miss2:.1}", t2.to_degrees());
+                }
                 continue;
             }
             let b1s: Vec<Option<usize>> = if cue_stopped {
@@ -418,7 +425,10 @@ fn read_scene(
             };
             for b1 in b1s {
                 let mut x0 = vec![o.0, o.1, r, alpha, psi_s];
-                let mut cost = t2.abs();
+                // A cue ball and an object ball of different colours: the object ball's streak
+                // has the disc's colour (a white pair gives no preference).
+                let best_like = likeness.iter().cloned().fold(f64::MIN, f64::max);
+                let mut cost = t2.abs() + 20.0 * (best_like - likeness[b2]).max(0.0);
                 if let Some(b1) = b1 {
                     let Some((d1, t1, l0, l1)) = initial_path(&streaks[b1], p, alpha, r) else {
                         continue;
@@ -445,6 +455,14 @@ fn read_scene(
         }
     }
     readings.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        for rd in &readings {
+            eprintln!(
+                "reading inc {} b1 {:?} b2 {} cost {:.3} x0 {:.3?}",
+                rd.inc, rd.b1, rd.b2, rd.cost, rd.x0
+            );
+        }
+    }
     let Some(best) = readings.first().cloned() else {
         return Err(
             "no physical reading of the streaks (no incoming path meeting the object ball with \
@@ -462,6 +480,31 @@ fn read_scene(
         ));
     }
     Ok(best)
+}
+
+/// Unit colour direction (ball minus cloth) of the disc's inner half, from the coarse signal.
+fn disc_colour(sig: &Signal, o: (f64, f64), r: f64) -> [f32; 3] {
+    let f = sig.f as f64;
+    let (cx, cy, rc) = (o.0 / f - 0.5, o.1 / f - 0.5, 0.5 * r / f);
+    let mut acc = [0f64; 3];
+    let (y0, y1) = ((cy - rc).floor().max(0.0) as usize, (cy + rc).ceil() as usize);
+    let (x0, x1) = ((cx - rc).floor().max(0.0) as usize, (cx + rc).ceil() as usize);
+    for y in y0..=y1.min(sig.ch - 1) {
+        for x in x0..=x1.min(sig.cw - 1) {
+            if (x as f64 - cx).hypot(y as f64 - cy) <= rc {
+                let d = sig.coarse_diff[y * sig.cw + x];
+                for c in 0..3 {
+                    acc[c] += d[c] as f64;
+                }
+            }
+        }
+    }
+    let n = (acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2]).sqrt();
+    if n > 0.0 {
+        acc.map(|v| (v / n) as f32)
+    } else {
+        sig.u
+    }
 }
 
 /// Whether a stationary ball sat at `p`: mean signal over a disc of radius `R/2` at `p` is at
@@ -627,7 +670,28 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         2 => true,
         _ => false,
     };
-    let reading = match read_scene(&kept, o, r, cue_stopped) {
+    // Colour likeness of each streak to the waiting disc (the object ball paints both).
+    let disc_u = disc_colour(&sig, o, r);
+    let likeness: Vec<f64> = colours
+        .iter()
+        .map(|u| (0..3).map(|c| (u[c] * disc_u[c]) as f64).sum())
+        .collect();
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!("likeness {likeness:?} colours {colours:?} disc {disc_u:?}");
+        for (i, k) in kept.iter().enumerate() {
+            let (a, b) = (k[0], k[k.len() - 1]);
+            eprintln!(
+                "kept {i}: n {} from ({:.0},{:.0}) to ({:.0},{:.0}): {:?}",
+                k.len(),
+                a.x,
+                a.y,
+                b.x,
+                b.y,
+                k.iter().map(|q| (q.x as i32, q.y as i32)).collect::<Vec<_>>()
+            );
+        }
+    }
+    let reading = match read_scene(&kept, &likeness, o, r, cue_stopped) {
         Ok(rd) => rd,
         Err(e) => {
             out.reason = e;
