@@ -700,6 +700,7 @@ fn walk(
     let mut p = seed;
     let mut d = dir;
     let mut fails = 0;
+    let mut skipped = 0usize;
     let max_steps = (4.0 * (sig.w + sig.h) as f64 / step) as usize;
     for _ in 0..max_steps {
         // The profile line must stay clear of the disc.
@@ -714,6 +715,14 @@ fn walk(
             (perp * perp + (along_n.abs() - half).powi(2)).sqrt()
         };
         if closest < ko.radius {
+            // A short streak seeded on the inner ring starts with profiles that graze the disc:
+            // step outward until they clear it (never inward, never after samples were taken).
+            let outward = qx * d.0 + qy * d.1 > 0.0;
+            if out.is_empty() && outward && skipped as f64 * step < 3.0 * r {
+                skipped += 1;
+                p = (p.0 + step * d.0, p.1 + step * d.1);
+                continue;
+            }
             break;
         }
         let Some(pc) = profile_centre(sig, p, d, r, step, None, u) else {
