@@ -189,6 +189,41 @@ fn kasa(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     (r2 > 0.0).then(|| (cx + mx, cy + my, r2.sqrt()))
 }
 
+/// Radius (along one ray) where the profile crosses the mean of the inside and outside levels
+/// extrapolated to the steepest-descent edge `re0`; `None` when the window leaves the profile.
+fn half_level_crossing(prof: &[f32], r_in: f64, step: f64, re0: f64) -> Option<f64> {
+    let idx = |rr: f64| ((rr - r_in) / step).round();
+    let level = |a: f64, b: f64| -> Option<f64> {
+        let (i0, i1) = (idx(a.min(b)), idx(a.max(b)));
+        if i0 < 0.0 || i1 as usize >= prof.len() {
+            return None;
+        }
+        let pts: Vec<(f64, f64)> = (i0 as usize..=i1 as usize)
+            .map(|i| (r_in + step * i as f64, prof[i] as f64))
+            .collect();
+        let n = pts.len() as f64;
+        let (mx, my) = pts.iter().fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
+        let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+        let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+        let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+        Some(my + b * (re0 - mx))
+    };
+    let inner = level(re0 - 6.0, re0 - 2.0)?;
+    let outer = level(re0 + 2.0, re0 + 6.0)?;
+    if inner <= outer {
+        return None;
+    }
+    let half = 0.5 * (inner + outer);
+    let (a, b) = (idx(re0 - 2.0) as usize, idx(re0 + 2.0) as usize);
+    for i in a..b {
+        let (v0, v1) = (prof[i] as f64, prof[i + 1] as f64);
+        if v0 >= half && v1 < half {
+            return Some(r_in + step * (i as f64 + (v0 - half) / (v0 - v1)));
+        }
+    }
+    None
+}
+
 /// Sub-pixel circle fit to the disc edge at full resolution.
 pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
     let (mut cx, mut cy, mut r) = (c.cx, c.cy, c.r);
@@ -248,7 +283,12 @@ pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
             } else {
                 0.0
             };
-            let re = r_in + step * (i as f64 + off);
+            let re0 = r_in + step * (i as f64 + off);
+            // The steepest descent sits inside the silhouette when the ball's limb is darker
+            // than its centre (shading): take the edge where the profile crosses half-way between
+            // the levels just inside and just outside, each extrapolated to the edge by a line
+            // through 2–6 px on its side.
+            let re = half_level_crossing(&prof, r_in, step, re0).unwrap_or(re0);
             let inside: f32 = prof[..n_s / 5].iter().sum::<f32>() / (n_s / 5) as f32;
             let outside: f32 = prof[n_s - n_s / 6..].iter().sum::<f32>() / (n_s / 6) as f32;
             edges.push((cx + re * ca, cy + re * sa));

@@ -174,51 +174,47 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
             } else {
                 sig.u
             };
-            // Local principal axis.
-            let rad = 3.0 * rc;
-            let (x0, x1) = (
-                (seed.0 - rad).floor().max(0.0) as usize,
-                ((seed.0 + rad).ceil() as usize).min(w - 1),
-            );
-            let (y0, y1) = (
-                (seed.1 - rad).floor().max(0.0) as usize,
-                ((seed.1 + rad).ceil() as usize).min(h - 1),
-            );
-            let (mut n, mut mx, mut my) = (0.0, 0.0, 0.0);
-            let mut pts = Vec::new();
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    let (dx, dy) = (x as f64 - seed.0, y as f64 - seed.1);
-                    let dox = ((x as f64 - ocx).powi(2) + (y as f64 - ocy).powi(2)).sqrt();
-                    if dx * dx + dy * dy <= rad * rad && dox >= rho - 0.5 * rc && s[y * w + x] > thr
-                    {
-                        pts.push((x as f64, y as f64));
-                        n += 1.0;
-                        mx += x as f64;
-                        my += y as f64;
-                    }
-                }
-            }
+            // Direction: the line from the seed outward (away from the disc, where the other
+            // streaks join) that carries the most light, a one-sided local Radon transform over
+            // 5 R. Every streak passes within 2R of O, so at the ring it points within 85° of
+            // the radial direction.
             let radial = (phi.cos(), phi.sin());
-            let mut d = radial;
-            if n >= 5.0 {
-                let (mx, my) = (mx / n, my / n);
-                let (mut cxx, mut cyy, mut cxy) = (0.0, 0.0, 0.0);
-                for p in &pts {
-                    cxx += (p.0 - mx).powi(2);
-                    cyy += (p.1 - my).powi(2);
-                    cxy += (p.0 - mx) * (p.1 - my);
+            let reach = 5.0 * rc;
+            let line_mean = |a: f64| -> f64 {
+                let (ca, sa) = (a.cos(), a.sin());
+                let (mut acc, mut n, mut tot) = (0.0f64, 0usize, 0usize);
+                let mut q = 0.5 * rc;
+                while q <= reach {
+                    tot += 1;
+                    if let Some(v) = at(seed.0 + q * ca, seed.1 + q * sa) {
+                        acc += v as f64;
+                        n += 1;
+                    }
+                    q += 0.5;
                 }
-                let tr = cxx + cyy;
-                let det = cxx * cyy - cxy * cxy;
-                let q = (tr * tr / 4.0 - det).max(0.0).sqrt();
-                // Only a clearly elongated patch has a trustworthy axis (a streak cut by the image
-                // border can be as wide as long); otherwise the radial direction is the better guess.
-                if tr / 2.0 + q > 2.5 * (tr / 2.0 - q).max(1e-9) {
-                    let ang = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
-                    d = (ang.cos(), ang.sin());
+                if 2 * n >= tot { acc / n as f64 } else { f64::NEG_INFINITY }
+            };
+            let n_dir = 341;
+            let angs: Vec<f64> = (0..n_dir)
+                .map(|k| phi + (k as f64 / (n_dir - 1) as f64 - 0.5) * 170f64.to_radians())
+                .collect();
+            let vals: Vec<f64> = angs.iter().map(|&a| line_mean(a)).collect();
+            let kbest = (0..n_dir)
+                .max_by(|&a, &b| vals[a].total_cmp(&vals[b]))
+                .unwrap_or(n_dir / 2);
+            let mut a_best = angs[kbest];
+            if kbest > 0 && kbest + 1 < n_dir {
+                let (vm, v0, vp) = (vals[kbest - 1], vals[kbest], vals[kbest + 1]);
+                let den = vm - 2.0 * v0 + vp;
+                if den.is_finite() && den < 0.0 {
+                    a_best += 0.5 * (vm - vp) / den * (angs[1] - angs[0]);
                 }
             }
+            let mut d = if vals[kbest].is_finite() {
+                (a_best.cos(), a_best.sin())
+            } else {
+                radial
+            };
             if d.0 * radial.0 + d.1 * radial.1 < 0.0 {
                 d = (-d.0, -d.1);
             }
@@ -266,10 +262,24 @@ pub struct ProfileCentre {
     pub amp: f64,
     pub noise: f64,
     pub n_core: f64,
+    /// Linear baseline `b0 + b1 t` under the profile.
+    pub b0: f64,
+    pub b1: f64,
 }
 
-/// Measures the streak centre on the line through `p` perpendicular to unit `d`.
-pub fn profile_centre(
+/// One cross-profile: offsets `t` (px along the normal `n = (-d.y, d.x)` from the profile's
+/// centre point), the signal averaged over one step along the streak, and which offsets fall in
+/// another ball's light.
+#[derive(Debug, Clone)]
+pub struct Profile {
+    pub t: Vec<f64>,
+    pub v: Vec<f64>,
+    pub bad: Vec<bool>,
+}
+
+/// Samples the cross-profile through `p` perpendicular to unit `d` over `±1.7 R`; `None` when the
+/// core is cut by the image border.
+pub fn sample_profile(
     sig: &Signal,
     p: (f64, f64),
     d: (f64, f64),
@@ -277,7 +287,7 @@ pub fn profile_centre(
     step: f64,
     excl: Option<&Exclusion>,
     u: [f32; 3],
-) -> Option<ProfileCentre> {
+) -> Option<Profile> {
     let n = (-d.1, d.0);
     let half = (1.7 * r).ceil() as i64;
     let n_a = (step.round() as usize).max(1);
@@ -318,13 +328,34 @@ pub fn profile_centre(
             .collect(),
         None => vec![false; t.len()],
     };
+    Some(Profile { t, v, bad })
+}
+
+/// Measures the streak centre on the line through `p` perpendicular to unit `d` (symmetric
+/// centroid with a baseline from the flanks).
+pub fn profile_centre(
+    sig: &Signal,
+    p: (f64, f64),
+    d: (f64, f64),
+    r: f64,
+    step: f64,
+    excl: Option<&Exclusion>,
+    u: [f32; 3],
+) -> Option<ProfileCentre> {
+    let pr = sample_profile(sig, p, d, r, step, excl, u)?;
+    let n_a = (step.round() as usize).max(1);
+    centroid(&pr, r, n_a)
+}
+
+fn centroid(pr: &Profile, r: f64, n_a: usize) -> Option<ProfileCentre> {
+    let (t, v, bad) = (&pr.t, &pr.v, &pr.bad);
     let mut c = 0.0;
     let mut res = None;
     for _it in 0..6 {
         // Baseline from the flanks.
         let (mut s1, mut st, mut stt, mut sv, mut stv) = (0.0, 0.0, 0.0, 0.0, 0.0);
         let (mut nl, mut nr) = (0, 0);
-        for ((tk, vk), b) in t.iter().zip(&v).zip(&bad) {
+        for ((tk, vk), b) in t.iter().zip(v).zip(bad) {
             let dd = tk - c;
             if *b {
                 if dd.abs() < 1.2 * r {
@@ -358,7 +389,7 @@ pub fn profile_centre(
         let mut flank = Vec::new();
         let (mut sw, mut swt, mut swr) = (0.0, 0.0, 0.0);
         let mut nc = 0.0;
-        for ((tk, vk), b) in t.iter().zip(&v).zip(&bad) {
+        for ((tk, vk), b) in t.iter().zip(v).zip(bad) {
             let s = vk - (b0 + b1 * tk);
             let dd = (tk - c).abs();
             if *b {
@@ -381,7 +412,7 @@ pub fn profile_centre(
         let c_new = swt / sw;
         let noise = (mad_sigma(&flank) as f64).max(1e-9);
         let mut var = 0.0;
-        for tk in &t {
+        for tk in t {
             let dd = (tk - c_new).abs();
             let wgt = (1.1 * r + 0.5 - dd).clamp(0.0, 1.0);
             var += wgt * wgt * (tk - c_new).powi(2);
@@ -393,6 +424,8 @@ pub fn profile_centre(
             amp: sw / swr,
             noise,
             n_core: nc * n_a as f64,
+            b0,
+            b1,
         });
         if (c_new - c).abs() < 1e-3 {
             break;
@@ -403,6 +436,227 @@ pub fn profile_centre(
         c = c_new;
     }
     res
+}
+
+/// Degree of the polynomial baseline under a profile fit: measured on clean and realistic
+/// synthetic sets (degrees 1, 2, 4, 6), degree ≥ 4 halves the centre-line wander that cloth
+/// blotches cause; 6 gains little more.
+const BASELINE_DEGREE: usize = 4;
+
+/// The cross-profile shape of one streak, measured from its own profiles: baseline-subtracted,
+/// amplitude-normalised, aligned on their centres, averaged and symmetrised. Cloth texture is the
+/// same size as a ball, so a centroid follows its blotches; a fit of the streak's own shape takes
+/// the centre from where the shape changes fastest (the ball's silhouette edges for a swept
+/// disc), where smooth blotches have no leverage. The shape is not assumed (a swept uniform disc
+/// gives `sqrt(R² - d²)`, a shaded one `R² - d²`); it is whatever the photo shows.
+#[derive(Debug, Clone)]
+pub struct Template {
+    /// Bin width (px) and half-width of the support (px); `vals[i]` is the shape at
+    /// `-half + i h`.
+    h: f64,
+    half: f64,
+    vals: Vec<f64>,
+}
+
+impl Template {
+    /// Builds the shape from profiles with their centres `c`, linear baselines and amplitudes.
+    pub fn estimate(profiles: &[(&Profile, ProfileCentre)], r: f64) -> Option<Template> {
+        if profiles.len() < 12 {
+            return None;
+        }
+        let h = 0.25;
+        let half = 1.25 * r;
+        let nb = (2.0 * half / h).round() as usize + 1;
+        let mut acc = vec![0.0; nb];
+        let mut cnt = vec![0.0; nb];
+        for (pr, pc) in profiles {
+            if pc.amp <= 0.0 {
+                continue;
+            }
+            for ((tk, vk), b) in pr.t.iter().zip(&pr.v).zip(&pr.bad) {
+                if *b {
+                    continue;
+                }
+                let uu = tk - pc.c;
+                if uu.abs() > half {
+                    continue;
+                }
+                let s = (vk - pc.b0 - pc.b1 * tk) / pc.amp;
+                // Linear splatting into the two nearest bins.
+                let x = (uu + half) / h;
+                let i0 = x.floor() as usize;
+                let f = x - i0 as f64;
+                if i0 < nb {
+                    acc[i0] += (1.0 - f) * s;
+                    cnt[i0] += 1.0 - f;
+                }
+                if i0 + 1 < nb {
+                    acc[i0 + 1] += f * s;
+                    cnt[i0 + 1] += f;
+                }
+            }
+        }
+        if cnt.iter().any(|c| *c <= 0.0) {
+            return None;
+        }
+        let mean: Vec<f64> = acc.iter().zip(&cnt).map(|(a, c)| a / c).collect();
+        // Symmetrise (the swept silhouette is symmetric about the centre-line), smooth with a
+        // 1-px box (sub-pixel alignment noise), and pin the tails to zero beyond the edge.
+        let sym: Vec<f64> = (0..nb).map(|i| 0.5 * (mean[i] + mean[nb - 1 - i])).collect();
+        let k = (0.5 / h).round() as usize;
+        let mut vals: Vec<f64> = (0..nb)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(k), (i + k).min(nb - 1));
+                sym[a..=b].iter().sum::<f64>() / (b - a + 1) as f64
+            })
+            .collect();
+        let edge = 1.1 * r;
+        for (i, v) in vals.iter_mut().enumerate() {
+            let uu = (-half + i as f64 * h).abs();
+            if uu > edge {
+                *v *= ((half - uu) / (half - edge)).clamp(0.0, 1.0);
+            }
+        }
+        let peak = vals.iter().cloned().fold(0.0, f64::max);
+        (peak > 0.0).then_some(Template { h, half, vals })
+    }
+
+    /// Shape and its derivative at offset `x` from the centre (zero outside the support).
+    #[inline]
+    fn at(&self, x: f64) -> (f64, f64) {
+        let q = (x + self.half) / self.h;
+        if q <= 0.0 || q >= (self.vals.len() - 1) as f64 {
+            return (0.0, 0.0);
+        }
+        let i = q.floor() as usize;
+        let f = q - i as f64;
+        let v = self.vals[i] + f * (self.vals[i + 1] - self.vals[i]);
+        // Derivative from a 1-px central difference of the interpolated shape (smooth enough for
+        // Gauss–Newton, no kinks at bin boundaries).
+        let d = 2;
+        let (a, b) = (i.saturating_sub(d), (i + d + 1).min(self.vals.len() - 1));
+        let g = (self.vals[b] - self.vals[a]) / ((b - a) as f64 * self.h);
+        (v, g)
+    }
+
+    /// Least-squares fit of `A T(t - c) + B(t)` to a profile, `B` a polynomial baseline of degree
+    /// `BASELINE_DEGREE` in `t / 1.7R` (Gauss–Newton in all parameters, from `c0`). The flexible
+    /// baseline absorbs cloth blotches of the streak's own size, so the centre comes from the
+    /// sharp parts of the shape; its standard error is from the fit's own residual scatter.
+    pub fn fit(&self, pr: &Profile, c0: f64, r: f64, n_a: usize) -> Option<ProfileCentre> {
+        let mut c = c0;
+        let mut out = None;
+        let scale = 1.0 / (1.7 * r);
+        for _it in 0..8 {
+            let (mut nl, mut nr) = (0usize, 0usize);
+            for (tk, b) in pr.t.iter().zip(&pr.bad) {
+                if *b {
+                    if (tk - c).abs() < 1.2 * r {
+                        return None;
+                    }
+                    continue;
+                }
+                if tk - c <= -1.15 * r {
+                    nl += 1;
+                }
+                if tk - c >= 1.15 * r {
+                    nr += 1;
+                }
+            }
+            // With one flank only, a constant baseline (a slope would trade off with the shape).
+            let deg = if (nl as f64) < 0.15 * r || (nr as f64) < 0.15 * r {
+                0
+            } else {
+                BASELINE_DEGREE
+            };
+            let k = 2 + deg + 1;
+            let mut rows: Vec<(f64, [f64; 10])> = Vec::with_capacity(pr.t.len());
+            let mut ata = nalgebra::DMatrix::<f64>::zeros(k, k);
+            let mut atb = nalgebra::DVector::<f64>::zeros(k);
+            // Linear parameters at this c first: A and the baseline.
+            let mut m = nalgebra::DMatrix::<f64>::zeros(k - 1, k - 1);
+            let mut rv = nalgebra::DVector::<f64>::zeros(k - 1);
+            for ((tk, vk), b) in pr.t.iter().zip(&pr.v).zip(&pr.bad) {
+                if *b {
+                    continue;
+                }
+                let (tv, tg) = self.at(tk - c);
+                let mut f = [0.0; 10];
+                f[1] = tv;
+                let z = tk * scale;
+                let mut zp = 1.0;
+                for q in 0..=deg {
+                    f[2 + q] = zp;
+                    zp *= z;
+                }
+                for a in 1..k {
+                    rv[a - 1] += f[a] * vk;
+                    for bb in 1..k {
+                        m[(a - 1, bb - 1)] += f[a] * f[bb];
+                    }
+                }
+                f[0] = tg;
+                rows.push((*vk, f));
+            }
+            let lin = m.cholesky()?.solve(&rv);
+            let a = lin[0];
+            if a <= 0.0 {
+                return None;
+            }
+            let mut sse = 0.0;
+            for (vk, f) in &rows {
+                let model: f64 = (1..k).map(|q| lin[q - 1] * f[q]).sum();
+                let e = vk - model;
+                let mut j = [0.0; 10];
+                j[0] = -a * f[0];
+                j[1..k].copy_from_slice(&f[1..k]);
+                for p in 0..k {
+                    atb[p] += j[p] * e;
+                    for q in 0..k {
+                        ata[(p, q)] += j[p] * j[q];
+                    }
+                }
+                sse += e * e;
+            }
+            let n = rows.len() as f64;
+            let chol = ata.cholesky()?;
+            let step = chol.solve(&atb);
+            let s2 = sse / (n - k as f64).max(1.0);
+            let var_c = chol.inverse()[(0, 0)] * s2;
+            let dc = step[0].clamp(-0.25 * r, 0.25 * r);
+            // The baseline's value and slope at t = 0 (for the template of the next round).
+            let (b0, b1) = (lin[1], if deg >= 1 { lin[2] * scale } else { 0.0 });
+            out = Some(ProfileCentre {
+                c: c + dc,
+                sigma: var_c.max(0.0).sqrt().max(1e-3),
+                amp: a * self.peak_mean(),
+                noise: s2.sqrt(),
+                n_core: 2.2 * r * n_a as f64,
+                b0,
+                b1,
+            });
+            c += dc;
+            if dc.abs() < 1e-3 {
+                break;
+            }
+            if (c - c0).abs() > 0.5 * r {
+                return None;
+            }
+        }
+        out
+    }
+
+    /// Mean of the shape over the core `|x| ≤ 1.1 R` relative to its normalisation, so that
+    /// `amp` keeps the meaning "mean core signal" of the centroid.
+    fn peak_mean(&self) -> f64 {
+        let n = self.vals.len();
+        let m = n / 2;
+        let k = (0.88 * self.half / self.h) as usize;
+        self.vals[m.saturating_sub(k)..(m + k).min(n)]
+            .iter()
+            .sum::<f64>()
+            / (2 * k).max(1) as f64
+    }
 }
 
 /// Where to stop tracking: the disc of the object ball (no profile line may come within
@@ -446,6 +700,7 @@ fn walk(
     let mut p = seed;
     let mut d = dir;
     let mut fails = 0;
+    let mut skipped = 0usize;
     let max_steps = (4.0 * (sig.w + sig.h) as f64 / step) as usize;
     for _ in 0..max_steps {
         // The profile line must stay clear of the disc.
@@ -460,6 +715,14 @@ fn walk(
             (perp * perp + (along_n.abs() - half).powi(2)).sqrt()
         };
         if closest < ko.radius {
+            // A short streak seeded on the inner ring starts with profiles that graze the disc:
+            // step outward until they clear it (never inward, never after samples were taken).
+            let outward = qx * d.0 + qy * d.1 > 0.0;
+            if out.is_empty() && outward && skipped as f64 * step < 3.0 * r {
+                skipped += 1;
+                p = (p.0 + step * d.0, p.1 + step * d.1);
+                continue;
+            }
             break;
         }
         let Some(pc) = profile_centre(sig, p, d, r, step, None, u) else {
@@ -561,7 +824,8 @@ impl Exclusion {
 }
 
 /// Re-measures a streak's centre-line at its samples with other balls' light excluded, and
-/// extends it towards `start` (the impact or the disc) while the core stays clean.
+/// extends it towards `start` (the impact or the disc) while the core stays clean. Centroids
+/// first; then two rounds of the streak's own [`Template`] fitted to every profile.
 pub fn remeasure(
     sig: &Signal,
     samples: &[Sample],
@@ -572,6 +836,7 @@ pub fn remeasure(
     u: [f32; 3],
 ) -> Vec<Sample> {
     let step = (r * step_r).max(2.0);
+    let n_a = (step.round() as usize).max(1);
     let n = samples.len();
     let dir_at = |i: usize| {
         let k = ((2.0 * r / step) as usize).max(1);
@@ -580,61 +845,73 @@ pub fn remeasure(
         let l = dx.hypot(dy).max(1e-9);
         (dx / l, dy / l)
     };
-    let mut out = Vec::new();
+    // (profile point, direction, profile, centre), ordered from the start outward.
+    let mut entries: Vec<((f64, f64), (f64, f64), Profile, ProfileCentre)> = Vec::new();
+    let snr_of = |pc: &ProfileCentre| pc.amp / (pc.noise / pc.n_core.sqrt());
     // Inward extension, from the first sample back towards the start point.
     if n >= 2 {
         let d = dir_at(0);
         let mut p = (samples[0].x - step * d.0, samples[0].y - step * d.1);
         let mut ext = Vec::new();
         let dist0 = (samples[0].x - start.0).hypot(samples[0].y - start.1);
-        let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
         for _ in 0..((dist0 / step) as usize) {
-            let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl), u) else {
-                if debug {
-                    eprintln!(
-                        "extension stops at ({:.0},{:.0}): profile rejected",
-                        p.0, p.1
-                    );
-                }
+            let Some(pr) = sample_profile(sig, p, d, r, step, Some(excl), u) else {
                 break;
             };
-            let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
-            if snr < 5.0 || pc.c.abs() > 0.15 * r {
-                if debug {
-                    eprintln!(
-                        "extension stops at ({:.0},{:.0}): snr {snr:.1} c {:.2}",
-                        p.0, p.1, pc.c
-                    );
-                }
+            let Some(pc) = centroid(&pr, r, n_a) else {
+                break;
+            };
+            if snr_of(&pc) < 5.0 || pc.c.abs() > 0.15 * r {
                 break;
             }
-            let q = (p.0 - pc.c * d.1, p.1 + pc.c * d.0);
-            ext.push(Sample {
-                x: q.0,
-                y: q.1,
-                sigma: pc.sigma,
-                amp: pc.amp,
-            });
+            ext.push((p, d, pr, pc));
             // Step along the extrapolated line, not from the measured centre, so light from
             // elsewhere cannot drag the extension off the streak.
             p = (p.0 - step * d.0, p.1 - step * d.1);
         }
-        out.extend(ext.into_iter().rev());
+        entries.extend(ext.into_iter().rev());
     }
     for (i, smp) in samples.iter().enumerate() {
         let d = dir_at(i);
         let p = (smp.x, smp.y);
-        if let Some(pc) = profile_centre(sig, p, d, r, step, Some(excl), u) {
-            let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
-            if snr >= 5.0 && pc.c.abs() < 0.3 * r {
-                out.push(Sample {
-                    x: p.0 - pc.c * d.1,
-                    y: p.1 + pc.c * d.0,
-                    sigma: pc.sigma,
-                    amp: pc.amp,
-                });
-            }
+        let pr = sample_profile(sig, p, d, r, step, Some(excl), u);
+        let pc = pr.as_ref().and_then(|pr| centroid(pr, r, n_a));
+        if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+            eprintln!(
+                "remeasure ({:.0},{:.0}): profile {} centroid {:?}",
+                p.0,
+                p.1,
+                pr.is_some(),
+                pc.map(|c| (c.c, snr_of(&c)))
+            );
+        }
+        if let (Some(pr), Some(pc)) = (pr, pc)
+            && snr_of(&pc) >= 5.0
+            && pc.c.abs() < 0.3 * r
+        {
+            entries.push((p, d, pr, pc));
         }
     }
-    out
+    for _round in 0..2 {
+        let refs: Vec<(&Profile, ProfileCentre)> = entries.iter().map(|e| (&e.2, e.3)).collect();
+        let Some(tpl) = Template::estimate(&refs, r) else {
+            break;
+        };
+        entries = entries
+            .into_iter()
+            .filter_map(|(p, d, pr, pc)| {
+                let f = tpl.fit(&pr, pc.c, r, n_a)?;
+                (f.c.abs() < 0.3 * r).then_some((p, d, pr, f))
+            })
+            .collect();
+    }
+    entries
+        .into_iter()
+        .map(|(p, d, _, pc)| Sample {
+            x: p.0 - pc.c * d.1,
+            y: p.1 + pc.c * d.0,
+            sigma: pc.sigma,
+            amp: pc.amp,
+        })
+        .collect()
 }
