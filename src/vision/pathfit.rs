@@ -14,8 +14,9 @@
 //!
 //! Residuals: signed perpendicular distance of each centre-line sample to its model curve divided
 //! by the sample's sigma, plus priors `(O - O_disc)/σ_O`, `(R - R_disc)/σ_R` from the disc fit.
-//! Levenberg–Marquardt with a central-difference Jacobian (each parameter only re-evaluates the
-//! residual groups it affects). Outliers (crossing streaks, highlights): samples beyond
+//! Levenberg–Marquardt with an analytic Jacobian (envelope theorem at the exact nearest point of
+//! each curve, see [`PathGeom::distance_grad`]; tested against central differences) and normal
+//! equations summed over the columns each residual group touches. Outliers (crossing streaks, highlights): samples beyond
 //! `max(4 s, 3)` normalised units (`s` = MAD scale) are dropped and the fit repeated.
 //! Model choice per ball by BIC, `χ²/(s² f) + k ln(n/f)`, with `s²` and the correlation factor
 //! `f` (below) from the richest model, so correlated samples are not counted as independent.
@@ -56,6 +57,71 @@ fn unit(a: f64) -> (f64, f64) {
 #[inline]
 fn cross(u: (f64, f64), v: (f64, f64)) -> f64 {
     u.0 * v.1 - u.1 * v.0
+}
+
+/// Root of `g` in `[lo, hi]` given `g(lo) < 0 ≤ g(hi)` and `g` monotone there: Newton from
+/// `start` (the secant point when that is not inside the bracket), falling back to bisection whenever a step leaves the shrinking bracket. Stops
+/// when the error after the last step, `|g''/2g'| Δτ²` by Newton's quadratic convergence, is
+/// below 1e-15 (a Δτ near 1e-8 for a well-conditioned foot).
+fn newton_root(
+    g: &impl Fn(f64) -> f64,
+    gp: &impl Fn(f64) -> (f64, f64),
+    mut lo: f64,
+    mut hi: f64,
+    glo: f64,
+    ghi: f64,
+    start: f64,
+) -> f64 {
+    let mut t = if start > lo && start < hi {
+        start
+    } else {
+        lo - glo * (hi - lo) / (ghi - glo)
+    };
+    if !(t >= lo && t <= hi) {
+        t = 0.5 * (lo + hi);
+    }
+    let mut tried_end = false;
+    for _ in 0..100 {
+        let gt = g(t);
+        if gt == 0.0 {
+            return t;
+        }
+        if gt < 0.0 {
+            lo = t;
+        } else {
+            hi = t;
+        }
+        let (d1, d2) = gp(t);
+        let step = gt / d1;
+        let tn = t - step;
+        if !(tn >= lo && tn <= hi) {
+            // Overshooting a bracket end the root sits next to (rounding) would make bisection
+            // crawl towards it: try that end once, bisect otherwise.
+            t = if !tried_end && tn.is_finite() {
+                tried_end = true;
+                if tn > hi { hi } else { lo }
+            } else {
+                0.5 * (lo + hi)
+            };
+            if hi - lo <= 1e-15 {
+                return t;
+            }
+            continue;
+        }
+        t = tn;
+        if (0.5 * d2 / d1).abs() * step * step <= 1e-15 || hi - lo <= 1e-15 {
+            return t;
+        }
+    }
+    t
+}
+
+/// Derivatives of a signed distance with respect to the path's start point and its own
+/// parameters (see [`PathGeom::distance_grad`]).
+#[derive(Debug, Clone, Copy)]
+struct DistGrad {
+    start: (f64, f64),
+    path: [f64; 4],
 }
 
 /// Geometry of one outgoing path in image coordinates.
@@ -121,65 +187,220 @@ impl PathGeom {
 
     /// Signed distance (left of the direction of motion positive) of `q` from the path.
     pub fn signed_distance(&self, q: (f64, f64)) -> f64 {
+        self.distance_grad(q).0
+    }
+
+    /// Parameter `τ ∈ [0, 1]` of the point of the Bézier nearest to `q`: the global minimum of
+    /// the quartic `|B(τ) - q|²`. With `A = C - S`, `K = P₁ - 2C + S`, `w = S - q`, its
+    /// stationarity condition `(B - q)·B'/2 = 0` is the cubic
+    /// `g(τ) = |K|² τ³ + 3 A·K τ² + (2|A|² + w·K) τ + w·A`. The real roots of the quadratic `g'`
+    /// cut `[0, 1]` into pieces on which `g` is monotone; a minimum is an endpoint where `g`
+    /// points inwards or the single root of a piece where `g` rises through zero, found by
+    /// bracketed Newton (bisection when a step leaves the bracket) to `|Δτ| ≲ 1e-15`.
+    fn bezier_foot(&self, q: (f64, f64)) -> f64 {
+        let a = (self.ctrl.0 - self.start.0, self.ctrl.1 - self.start.1);
+        let k = (
+            self.end.0 - 2.0 * self.ctrl.0 + self.start.0,
+            self.end.1 - 2.0 * self.ctrl.1 + self.start.1,
+        );
+        let w = (self.start.0 - q.0, self.start.1 - q.1);
+        let c3 = k.0 * k.0 + k.1 * k.1;
+        let c2 = 3.0 * (a.0 * k.0 + a.1 * k.1);
+        let c1 = 2.0 * (a.0 * a.0 + a.1 * a.1) + w.0 * k.0 + w.1 * k.1;
+        let c0 = w.0 * a.0 + w.1 * a.1;
+        let g = |t: f64| ((c3 * t + c2) * t + c1) * t + c0;
+        // g' and g''.
+        let gp = |t: f64| ((3.0 * c3 * t + 2.0 * c2) * t + c1, 6.0 * c3 * t + 2.0 * c2);
+        // Cut points: 0, the roots of g' = 3 c3 τ² + 2 c2 τ + c1 inside (0, 1), 1. The stable
+        // form of the quadratic formula keeps both roots accurate when the Bézier is nearly
+        // straight (c3 → 0).
+        let mut cuts = [0.0, 1.0, 1.0, 1.0];
+        let mut n_cuts = 1;
+        let disc = c2 * c2 - 3.0 * c3 * c1;
+        if disc > 0.0 {
+            let qq = -(c2 + disc.sqrt().copysign(c2));
+            let (mut r1, mut r2) = (qq / (3.0 * c3), c1 / qq);
+            if r1 > r2 {
+                std::mem::swap(&mut r1, &mut r2);
+            }
+            for r in [r1, r2] {
+                if r > 0.0 && r < 1.0 {
+                    cuts[n_cuts] = r;
+                    n_cuts += 1;
+                }
+            }
+        }
+        cuts[n_cuts] = 1.0;
+        let dist2 = |t: f64| {
+            let b = self.bezier(t);
+            (b.0 - q.0).powi(2) + (b.1 - q.1).powi(2)
+        };
+        let mut best = (f64::NAN, f64::INFINITY);
+        let mut consider = |t: f64| {
+            let d2 = dist2(t);
+            if d2 < best.1 {
+                best = (t, d2);
+            }
+        };
+        let g0 = g(0.0);
+        let g1 = g(1.0);
+        // Newton starts where a straight Bézier with the same control lengths would put the
+        // foot: the chord fraction σ of q solves 2 a₀ τ + (a₁ - a₀) τ² = σ (a₀ + a₁ = 1).
+        let start = {
+            let dch = (
+                a.0 + self.end.0 - self.ctrl.0,
+                a.1 + self.end.1 - self.ctrl.1,
+            );
+            let dd = dch.0 * dch.0 + dch.1 * dch.1;
+            let a0 = (a.0 * dch.0 + a.1 * dch.1) / dd;
+            let sigma = -(w.0 * dch.0 + w.1 * dch.1) / dd;
+            let disc = a0 * a0 + (1.0 - 2.0 * a0) * sigma;
+            if a0 > 0.0 && disc >= 0.0 {
+                sigma / (a0 + disc.sqrt())
+            } else {
+                f64::NAN
+            }
+        };
+        if n_cuts == 1 {
+            // g is monotone on [0, 1] (the common case). Rising: one minimum; falling: one
+            // maximum inside, so the minimum is the nearer end.
+            match (g0 >= 0.0, g1 <= 0.0) {
+                (true, false) => return 0.0,
+                (false, true) => return 1.0,
+                (false, false) => return newton_root(&g, &gp, 0.0, 1.0, g0, g1, start),
+                (true, true) => {}
+            }
+        }
+        if g0 >= 0.0 {
+            consider(0.0);
+        }
+        if g1 <= 0.0 {
+            consider(1.0);
+        }
+        let mut ga = g0;
+        for i in 0..n_cuts {
+            let (lo, hi) = (cuts[i], cuts[i + 1]);
+            let gb = if i + 1 == n_cuts { g1 } else { g(hi) };
+            if ga < 0.0 && gb >= 0.0 {
+                consider(newton_root(&g, &gp, lo, hi, ga, gb, start));
+            }
+            ga = gb;
+        }
+        if best.0.is_nan() {
+            // Unreachable for a finite quartic (it has a minimum on [0, 1]); kept finite anyway.
+            return if g0 >= 0.0 { 0.0 } else { 1.0 };
+        }
+        best.0
+    }
+
+    /// Signed distance of `q` from the path and its derivatives with respect to the path's start
+    /// point and to its own parameters: `[theta]` for a line, `[delta, theta, l0, l1]` for
+    /// parabola+line, with `l0, l1` the effective lengths `|L| + 0.5`.
+    ///
+    /// The distance is `n̂·(q - F)` with `F` the foot point on the curve and `n̂` its left normal.
+    /// At an interior foot `q - F ∥ n̂`, so moving the foot along the curve or turning the tangent
+    /// changes nothing to first order (envelope theorem): `∂d/∂p = -n̂·∂F/∂p` with the curve
+    /// parameter held fixed. Where the foot is pinned (the Bézier's ends, a ray's start) the
+    /// tangent's turn adds `-(T̂·(q - F)) ∂φ_T/∂p`. A point behind a line's start gets
+    /// `±|q - S|`, whose derivative is `∓ (q - S)/|q - S|·∂S/∂p`. The curve point is
+    /// `B(τ) = S + b₀ l₀ u₀ + b₁ l₁ u₁` with `b₀ = 2τ - τ²`, `b₁ = τ²` (`τ = 1` plus `σ u₁` on
+    /// the ray), so `∂B/∂δ = b₀ l₀ n̂₀`, `∂B/∂θ = b₁ l₁ n̂₁`, `∂B/∂l₀ = b₀ u₀`, `∂B/∂l₁ = b₁ u₁`.
+    fn distance_grad(&self, q: (f64, f64)) -> (f64, DistGrad) {
+        let perp = |v: (f64, f64)| (-v.1, v.0);
+        let dot = |u: (f64, f64), v: (f64, f64)| u.0 * v.0 + u.1 * v.1;
         if self.model == PathModel::Line {
             // A ray, not a line: a point behind the start is as far as the start itself (this
             // also keeps theta from flipping by 180°).
             let w = (q.0 - self.start.0, q.1 - self.start.1);
             let c = cross(self.u1, w);
-            let along = w.0 * self.u1.0 + w.1 * self.u1.1;
-            return if along >= 0.0 {
-                c
-            } else {
-                w.0.hypot(w.1).copysign(c)
-            };
+            let along = dot(w, self.u1);
+            if along >= 0.0 {
+                let n = perp(self.u1);
+                return (
+                    c,
+                    DistGrad {
+                        start: (-n.0, -n.1),
+                        path: [-along, 0.0, 0.0, 0.0],
+                    },
+                );
+            }
+            let len = w.0.hypot(w.1);
+            let d = len.copysign(c);
+            let f = if len > 0.0 { d / (len * len) } else { 0.0 };
+            return (
+                d,
+                DistGrad {
+                    start: (-f * w.0, -f * w.1),
+                    path: [0.0; 4],
+                },
+            );
         }
+        // l₀ n̂₀ and l₁ n̂₁ straight from the control polygon (no lengths needed).
+        let l0n0 = perp((self.ctrl.0 - self.start.0, self.ctrl.1 - self.start.1));
+        let l1n1 = perp((self.end.0 - self.ctrl.0, self.end.1 - self.ctrl.1));
         let rel = (q.0 - self.end.0, q.1 - self.end.1);
-        let s = rel.0 * self.u1.0 + rel.1 * self.u1.1;
+        let s = dot(rel, self.u1);
+        let ray = |s: f64| {
+            let n1 = perp(self.u1);
+            (
+                cross(self.u1, rel),
+                DistGrad {
+                    start: (-n1.0, -n1.1),
+                    path: [-dot(n1, l0n0), -s - dot(n1, l1n1), -dot(n1, self.u0), 0.0],
+                },
+            )
+        };
         let d_ray = if s >= 0.0 {
             cross(self.u1, rel)
         } else {
             f64::INFINITY
         };
-        // Closest point on the Bézier: coarse scan, then Newton on (B - q)·B' = 0.
-        let mut best = (0.0, f64::INFINITY);
-        for i in 0..=12 {
-            let t = i as f64 / 12.0;
-            let b = self.bezier(t);
-            let d2 = (b.0 - q.0).powi(2) + (b.1 - q.1).powi(2);
-            if d2 < best.1 {
-                best = (t, d2);
-            }
+        // With u₀·u₁ ≥ 0 the whole Bézier lies at or behind its end along u₁, so its Euclidean
+        // distance from a point `s` ahead of the end is at least `s`; when `q` is also ahead of
+        // the start along u₀ the Bézier distance is Euclidean (the foot is not pinned at τ = 0,
+        // where only the part across the start tangent counts): the ray wins without a search.
+        if s > d_ray.abs()
+            && dot(self.u0, self.u1) >= 0.0
+            && dot((q.0 - self.start.0, q.1 - self.start.1), self.u0) > 0.0
+        {
+            return ray(s);
         }
-        let mut t = best.0;
-        let dd = (
-            2.0 * (self.end.0 - 2.0 * self.ctrl.0 + self.start.0),
-            2.0 * (self.end.1 - 2.0 * self.ctrl.1 + self.start.1),
-        );
-        for _ in 0..8 {
-            let b = self.bezier(t);
-            let d = self.bezier_d(t);
-            let e = (b.0 - q.0, b.1 - q.1);
-            let g = e.0 * d.0 + e.1 * d.1;
-            let gp = d.0 * d.0 + d.1 * d.1 + e.0 * dd.0 + e.1 * dd.1;
-            if gp.abs() < 1e-12 {
-                break;
-            }
-            t = (t - g / gp).clamp(0.0, 1.0);
-        }
+        let t = self.bezier_foot(q);
         let b = self.bezier(t);
-        let mut d = self.bezier_d(t);
-        let l = d.0.hypot(d.1);
-        if l < 1e-12 {
-            d = self.u0;
+        let d = self.bezier_d(t);
+        let l = (d.0 * d.0 + d.1 * d.1).sqrt();
+        let tg = if l < 1e-12 {
+            self.u0
         } else {
-            d = (d.0 / l, d.1 / l);
-        }
-        let d_bez = cross(d, (q.0 - b.0, q.1 - b.1));
+            (d.0 / l, d.1 / l)
+        };
+        let w = (q.0 - b.0, q.1 - b.1);
+        let d_bez = cross(tg, w);
         if d_ray.abs() < d_bez.abs() {
-            d_ray
-        } else {
-            d_bez
+            return ray(s);
         }
+        let n = perp(tg);
+        let (b0, b1) = (t * (2.0 - t), t * t);
+        let mut path = [
+            -b0 * dot(n, l0n0),
+            -b1 * dot(n, l1n1),
+            -b0 * dot(n, self.u0),
+            -b1 * dot(n, self.u1),
+        ];
+        // Pinned foot (bezier_foot returns the ends exactly): the end tangent turns with delta
+        // (τ = 0) or theta (τ = 1).
+        if t <= 0.0 {
+            path[0] -= dot(tg, w);
+        } else if t >= 1.0 {
+            path[1] -= dot(tg, w);
+        }
+        (
+            d_bez,
+            DistGrad {
+                start: (-n.0, -n.1),
+                path,
+            },
+        )
     }
 
     /// Points along the fitted path up to arc length `len` (for drawing).
@@ -305,6 +526,119 @@ struct Model<'a> {
     use_: [Vec<bool>; 3],
 }
 
+/// Residuals stacked by group, the group bounds (`r[bounds[g]..bounds[g + 1]]`) and, when asked
+/// for, their Jacobian.
+struct Eval {
+    r: Vec<f64>,
+    bounds: [usize; 5],
+    j: Option<Jac>,
+}
+
+impl Eval {
+    fn cost(&self) -> f64 {
+        self.r.iter().map(|v| v * v).sum()
+    }
+}
+
+/// Jacobian stored by rows: a row touches few columns (the shared five and its own ball's), and
+/// the normal equations are summed row by row over those columns only.
+struct Jac {
+    k: usize,
+    data: Vec<f64>,
+}
+
+impl Jac {
+    fn zeros(n: usize, k: usize) -> Self {
+        Self {
+            k,
+            data: vec![0.0; n * k],
+        }
+    }
+    fn row(&self, i: usize) -> &[f64] {
+        &self.data[i * self.k..(i + 1) * self.k]
+    }
+    #[cfg(test)]
+    fn to_dmatrix(&self) -> DMatrix<f64> {
+        DMatrix::from_row_slice(self.data.len() / self.k, self.k, &self.data)
+    }
+}
+
+impl std::ops::Index<(usize, usize)> for Jac {
+    type Output = f64;
+    fn index(&self, (i, c): (usize, usize)) -> &f64 {
+        &self.data[i * self.k + c]
+    }
+}
+
+impl std::ops::IndexMut<(usize, usize)> for Jac {
+    fn index_mut(&mut self, (i, c): (usize, usize)) -> &mut f64 {
+        &mut self.data[i * self.k + c]
+    }
+}
+
+/// Columns (ascending) that residual group `g` can depend on: priors all, incoming the shared
+/// five, the cue ball `O, R, α` and its own, the object ball `O, α` and its own.
+fn group_cols(m1: Option<PathModel>, m2: PathModel) -> [Vec<usize>; 4] {
+    let off2 = 5 + m1.map_or(0, |m| m.n_params());
+    let k = off2 + m2.n_params();
+    [
+        (0..k).collect(),
+        (0..5).collect(),
+        (0..4).chain(5..off2).collect(),
+        [0, 1, 3].into_iter().chain(off2..k).collect(),
+    ]
+}
+
+/// `Σ_g w_g J_gᵀ J_g` and `Σ_g w_g J_gᵀ r_g` over the residual groups.
+fn normal_equations(
+    j: &Jac,
+    r: &[f64],
+    bounds: &[usize; 5],
+    cols: &[Vec<usize>; 4],
+    w: [f64; 4],
+) -> (DMatrix<f64>, DVector<f64>) {
+    const MAX: usize = 13; // 5 shared + 4 + 4 parameters
+    let k = j.k;
+    assert!(k <= MAX, "at most {MAX} parameters");
+    let mut a = vec![0.0; k * k];
+    let mut g = vec![0.0; k];
+    for grp in 0..4 {
+        let cs = &cols[grp];
+        let m = cs.len();
+        // Dense m×m sums over the group's own columns, scattered once at the end.
+        let mut acc = [0.0f64; MAX * MAX];
+        let mut gacc = [0.0f64; MAX];
+        let mut v = [0.0f64; MAX];
+        let rows = bounds[grp]..bounds[grp + 1];
+        for (i, &ri) in rows.clone().zip(&r[rows]) {
+            let row = j.row(i);
+            for (t, &c) in cs.iter().enumerate() {
+                v[t] = row[c];
+            }
+            for p in 0..m {
+                let vp = v[p];
+                gacc[p] += vp * ri;
+                for q in p..m {
+                    acc[p * MAX + q] += vp * v[q];
+                }
+            }
+        }
+        for (p, &cp) in cs.iter().enumerate() {
+            g[cp] += w[grp] * gacc[p];
+            for (q, &cq) in cs.iter().enumerate().skip(p) {
+                a[cp * k + cq] += w[grp] * acc[p * MAX + q];
+            }
+        }
+    }
+    // Mirror the upper triangle.
+    for ca in 0..k {
+        for cb in 0..ca {
+            a[ca * k + cb] = a[cb * k + ca];
+        }
+    }
+    (DMatrix::from_row_slice(k, k, &a), DVector::from_vec(g))
+}
+
 impl Model<'_> {
     fn n_params(&self) -> usize {
         5 + self.m1.map_or(0, |m| m.n_params()) + self.m2.n_params()
@@ -312,104 +646,175 @@ impl Model<'_> {
     fn off2(&self) -> usize {
         5 + self.m1.map_or(0, |m| m.n_params())
     }
-    /// Which residual groups depend on parameter `j`.
-    fn groups_of(&self, j: usize) -> [bool; 4] {
-        match j {
-            0 | 1 => [true, true, true, true],
-            2 => [true, true, true, false],
-            3 => [false, true, true, true],
-            4 => [false, true, false, false],
-            _ if j < self.off2() => [true, false, true, false],
-            _ => [true, false, false, true],
-        }
+    fn ball1(&self) -> Option<(PathModel, &[Sample])> {
+        Some((self.m1?, self.pb.out1.as_deref()?))
     }
-    fn group(&self, g: usize, p: &[f64], out: &mut Vec<f64>) {
-        out.clear();
-        match g {
-            0 => {
-                out.push((p[0] - self.pb.o_meas.0) / self.pb.sigma_o);
-                out.push((p[1] - self.pb.o_meas.1) / self.pb.sigma_o);
-                out.push((p[2] - self.pb.r_meas) / self.pb.sigma_r);
-                // Sliding arcs are short (cloth friction 0.15–0.55: one to three diameters);
-                // a soft wall at L0 + L1 = 12 R keeps a parabola from absorbing the whole path.
-                let wall = |l: f64| ((l - 12.0 * p[2]).max(0.0) / (0.1 * p[2])).min(1e6);
-                if self.m1 == Some(PathModel::ParabolaLine) {
-                    out.push(wall(p[7].abs() + p[8].abs()));
-                }
-                if self.m2 == PathModel::ParabolaLine {
-                    let o = self.off2();
-                    out.push(wall(p[o + 2].abs() + p[o + 3].abs()));
-                }
-            }
-            1 => {
-                let pi = impact_point(p);
-                let u = unit(p[3] + p[4]);
-                for (s, &k) in self.pb.incoming.iter().zip(&self.use_[0]) {
-                    if k {
-                        out.push(cross(u, (s.x - pi.0, s.y - pi.1)) / s.sigma);
-                    }
-                }
-            }
-            2 => {
-                if let (Some(m), Some(samples)) = (self.m1, &self.pb.out1) {
-                    let geom = PathGeom::new(m, impact_point(p), p[3], &p[5..]);
-                    for (s, &k) in samples.iter().zip(&self.use_[1]) {
-                        if k {
-                            out.push(geom.signed_distance((s.x, s.y)) / s.sigma);
-                        }
-                    }
-                }
-            }
-            _ => {
-                let geom = PathGeom::new(self.m2, (p[0], p[1]), p[3], &p[self.off2()..]);
-                for (s, &k) in self.pb.out2.iter().zip(&self.use_[2]) {
-                    if k {
-                        out.push(geom.signed_distance((s.x, s.y)) / s.sigma);
-                    }
-                }
-            }
-        }
-    }
-    fn residuals(&self, p: &[f64]) -> (Vec<f64>, [usize; 5]) {
-        let mut all = Vec::new();
+    /// Residuals at `p`, and with `want_jac` their analytic Jacobian (each signed distance
+    /// differentiated by [`PathGeom::distance_grad`], chained through `S = P = O - 2R x̂` for
+    /// the cue ball and `S = O` for the object ball).
+    fn eval(&self, p: &[f64], want_jac: bool) -> Eval {
+        let used = |u: &[bool]| u.iter().filter(|k| **k).count();
+        let walls = usize::from(self.m1 == Some(PathModel::ParabolaLine))
+            + usize::from(self.m2 == PathModel::ParabolaLine);
+        let n = 3
+            + walls
+            + used(&self.use_[0])
+            + self.ball1().map_or(0, |_| used(&self.use_[1]))
+            + used(&self.use_[2]);
+        let mut r = Vec::with_capacity(n);
+        let mut jac = want_jac.then(|| Jac::zeros(n, p.len()));
         let mut bounds = [0usize; 5];
-        let mut buf = Vec::new();
-        for g in 0..4 {
-            self.group(g, p, &mut buf);
-            all.extend_from_slice(&buf);
-            bounds[g + 1] = all.len();
+        let pb = self.pb;
+        // Group 0: priors from the disc fit.
+        r.push((p[0] - pb.o_meas.0) / pb.sigma_o);
+        r.push((p[1] - pb.o_meas.1) / pb.sigma_o);
+        r.push((p[2] - pb.r_meas) / pb.sigma_r);
+        if let Some(j) = &mut jac {
+            j[(0, 0)] = 1.0 / pb.sigma_o;
+            j[(1, 1)] = 1.0 / pb.sigma_o;
+            j[(2, 2)] = 1.0 / pb.sigma_r;
         }
-        (all, bounds)
+        // Sliding arcs are short (cloth friction 0.15–0.55: one to three diameters); a soft
+        // wall at L0 + L1 = 12 R keeps a parabola from absorbing the whole path.
+        let big_r = p[2];
+        for (present, off) in [
+            (self.m1 == Some(PathModel::ParabolaLine), 5),
+            (self.m2 == PathModel::ParabolaLine, self.off2()),
+        ] {
+            if !present {
+                continue;
+            }
+            let l = p[off + 2].abs() + p[off + 3].abs();
+            let v = ((l - 12.0 * big_r).max(0.0) / (0.1 * big_r)).min(1e6);
+            let row = r.len();
+            r.push(v);
+            if let Some(j) = &mut jac
+                && v > 0.0
+                && v < 1e6
+            {
+                // v = 10 l / R - 120 on the slope.
+                let dl = 10.0 / big_r;
+                j[(row, off + 2)] = dl * p[off + 2].signum();
+                j[(row, off + 3)] = dl * p[off + 3].signum();
+                j[(row, 2)] = -10.0 * l / (big_r * big_r);
+            }
+        }
+        bounds[1] = r.len();
+        // Group 1: incoming line through P along u(α + ψs).
+        let pi = impact_point(p);
+        let xh = unit(p[3]);
+        let nx = (-xh.1, xh.0);
+        let u = unit(p[3] + p[4]);
+        let nu = (-u.1, u.0);
+        for (s, _) in pb.incoming.iter().zip(&self.use_[0]).filter(|(_, k)| **k) {
+            let w = (s.x - pi.0, s.y - pi.1);
+            let row = r.len();
+            r.push(cross(u, w) / s.sigma);
+            if let Some(j) = &mut jac {
+                let inv = 1.0 / s.sigma;
+                let along = u.0 * w.0 + u.1 * w.1;
+                j[(row, 0)] = -nu.0 * inv;
+                j[(row, 1)] = -nu.1 * inv;
+                j[(row, 2)] = 2.0 * (nu.0 * xh.0 + nu.1 * xh.1) * inv;
+                j[(row, 3)] = (-along + 2.0 * big_r * (nu.0 * nx.0 + nu.1 * nx.1)) * inv;
+                j[(row, 4)] = -along * inv;
+            }
+        }
+        bounds[2] = r.len();
+        // Groups 2 and 3: the outgoing paths.
+        if let Some((m, samples)) = self.ball1() {
+            let geom = PathGeom::new(m, pi, p[3], &p[5..]);
+            self.path_rows(&geom, 5, true, samples, &self.use_[1], p, &mut r, &mut jac);
+        }
+        bounds[3] = r.len();
+        let off2 = self.off2();
+        let geom = PathGeom::new(self.m2, (p[0], p[1]), p[3], &p[off2..]);
+        self.path_rows(
+            &geom,
+            off2,
+            false,
+            &pb.out2,
+            &self.use_[2],
+            p,
+            &mut r,
+            &mut jac,
+        );
+        bounds[4] = r.len();
+        Eval { r, bounds, j: jac }
     }
-    fn jacobian(&self, p: &[f64], bounds: &[usize; 5]) -> DMatrix<f64> {
-        let n = bounds[4];
-        let k = p.len();
-        let mut j = DMatrix::zeros(n, k);
+
+    /// Residual rows of one outgoing path (parameters from `off`; `from_impact`: its start is
+    /// `P`, else `O`).
+    #[allow(clippy::too_many_arguments)]
+    fn path_rows(
+        &self,
+        geom: &PathGeom,
+        off: usize,
+        from_impact: bool,
+        samples: &[Sample],
+        use_: &[bool],
+        p: &[f64],
+        r: &mut Vec<f64>,
+        jac: &mut Option<Jac>,
+    ) {
+        let xh = unit(p[3]);
+        let nx = (-xh.1, xh.0);
+        for (s, _) in samples.iter().zip(use_).filter(|(_, k)| **k) {
+            let (d, gr) = geom.distance_grad((s.x, s.y));
+            let row = r.len();
+            r.push(d / s.sigma);
+            let Some(j) = jac else { continue };
+            let inv = 1.0 / s.sigma;
+            let ds = gr.start;
+            // α turns both directions (u(α + δ), u(α + θ)) as well as moving `P`.
+            let mut da = match geom.model {
+                PathModel::Line => gr.path[0],
+                PathModel::ParabolaLine => gr.path[0] + gr.path[1],
+            };
+            j[(row, 0)] = ds.0 * inv;
+            j[(row, 1)] = ds.1 * inv;
+            if from_impact {
+                j[(row, 2)] = -2.0 * (ds.0 * xh.0 + ds.1 * xh.1) * inv;
+                da -= 2.0 * p[2] * (ds.0 * nx.0 + ds.1 * nx.1);
+            }
+            j[(row, 3)] = da * inv;
+            match geom.model {
+                PathModel::Line => j[(row, off)] = gr.path[0] * inv,
+                PathModel::ParabolaLine => {
+                    j[(row, off)] = gr.path[0] * inv;
+                    j[(row, off + 1)] = gr.path[1] * inv;
+                    // Lengths enter as |L| + 0.5.
+                    j[(row, off + 2)] = gr.path[2] * p[off + 2].signum() * inv;
+                    j[(row, off + 3)] = gr.path[3] * p[off + 3].signum() * inv;
+                }
+            }
+        }
+    }
+
+    /// Central-difference Jacobian: the oracle the analytic one is tested against.
+    #[cfg(test)]
+    fn jacobian_numeric(&self, p: &[f64]) -> DMatrix<f64> {
+        let n = self.eval(p, false).r.len();
+        let mut j = DMatrix::zeros(n, p.len());
         let mut pp = p.to_vec();
-        let (mut a, mut b) = (Vec::new(), Vec::new());
-        for c in 0..k {
+        for c in 0..p.len() {
             let h = if c <= 2 || (c >= 5 && self.is_length(c)) {
                 1e-4
             } else {
                 1e-6
             };
-            let deps = self.groups_of(c);
-            for g in 0..4 {
-                if !deps[g] {
-                    continue;
-                }
-                pp[c] = p[c] + h;
-                self.group(g, &pp, &mut a);
-                pp[c] = p[c] - h;
-                self.group(g, &pp, &mut b);
-                pp[c] = p[c];
-                for (i, (x, y)) in a.iter().zip(&b).enumerate() {
-                    j[(bounds[g] + i, c)] = (x - y) / (2.0 * h);
-                }
+            pp[c] = p[c] + h;
+            let a = self.eval(&pp, false).r;
+            pp[c] = p[c] - h;
+            let b = self.eval(&pp, false).r;
+            pp[c] = p[c];
+            for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+                j[(i, c)] = (x - y) / (2.0 * h);
             }
         }
         j
     }
+    #[cfg(test)]
     fn is_length(&self, c: usize) -> bool {
         let check = |m: PathModel, off: usize| {
             m == PathModel::ParabolaLine && (c == off + 2 || c == off + 3)
@@ -418,16 +823,18 @@ impl Model<'_> {
     }
 }
 
-fn lm(model: &Model, x0: &[f64], s: &FitSettings) -> Vec<f64> {
+/// Levenberg–Marquardt from `x0`; returns the solution and its evaluation (with Jacobian).
+fn lm(model: &Model, x0: &[f64], s: &FitSettings) -> (Vec<f64>, Eval) {
     let mut x = x0.to_vec();
-    let (mut r, mut bounds) = model.residuals(&x);
-    let mut cost: f64 = r.iter().map(|v| v * v).sum();
+    let mut ev = model.eval(&x, true);
+    let mut cost = ev.cost();
     let mut lambda = 1e-3;
+    let cols = group_cols(model.m1, model.m2);
     for _ in 0..s.lm_max_iter {
-        let j = model.jacobian(&x, &bounds);
-        let rv = DVector::from_vec(r.clone());
-        let a = j.transpose() * &j;
-        let g = j.transpose() * rv;
+        let (a, g) = {
+            let j = ev.j.as_ref().expect("evaluated with the Jacobian");
+            normal_equations(j, &ev.r, &ev.bounds, &cols, [1.0; 4])
+        };
         let mut improved = false;
         for _ in 0..12 {
             let mut m = a.clone();
@@ -439,18 +846,18 @@ fn lm(model: &Model, x0: &[f64], s: &FitSettings) -> Vec<f64> {
                 continue;
             };
             let xn: Vec<f64> = x.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
-            let (rn, bn) = model.residuals(&xn);
-            let cn: f64 = rn.iter().map(|v| v * v).sum();
+            // The Jacobian comes with the trial: most trials are accepted and need it next.
+            let en = model.eval(&xn, true);
+            let cn = en.cost();
             if cn.is_finite() && cn <= cost {
                 let rel = (cost - cn) / cost.max(1e-300);
                 x = xn;
-                r = rn;
-                bounds = bn;
+                ev = en;
                 cost = cn;
                 lambda = (lambda / 3.0).max(1e-12);
                 improved = true;
                 if rel < s.lm_rel_tol {
-                    return x;
+                    return (x, ev);
                 }
                 break;
             }
@@ -460,7 +867,7 @@ fn lm(model: &Model, x0: &[f64], s: &FitSettings) -> Vec<f64> {
             break;
         }
     }
-    x
+    (x, ev)
 }
 
 /// Correlation factor of an ordered residual sequence: the larger of `1 + 2 Σ ρ_k` (sum stops at
@@ -505,10 +912,10 @@ fn model_fit<'a>(
     x0: &[f64],
     use_: [Vec<bool>; 3],
     s: &FitSettings,
-) -> (Vec<f64>, Model<'a>) {
+) -> (Vec<f64>, Eval, Model<'a>) {
     let model = Model { pb, m1, m2, use_ };
-    let x = lm(&model, x0, s);
-    (x, model)
+    let (x, ev) = lm(&model, x0, s);
+    (x, ev, model)
 }
 
 /// Converts a parameter vector between path models (keeps shared angles).
@@ -540,6 +947,26 @@ fn convert(
     push_ball(from.0, to.0, &mut off, &mut out);
     push_ball(Some(from.1), Some(to.1), &mut off, &mut out);
     out
+}
+
+/// `(J'ᵀ J')⁻¹`, except that a parameter no residual depends on (an all-zero Jacobian column,
+/// e.g. the parabola's length `L1` when every sample lies on the rolling line) is undetermined:
+/// infinite variance, no covariance, and the rest inverted without it.
+fn covariance(a: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let k = a.nrows();
+    let keep: Vec<usize> = (0..k).filter(|&i| a[(i, i)] > 0.0).collect();
+    let sub = DMatrix::from_fn(keep.len(), keep.len(), |r, c| a[(keep[r], keep[c])]);
+    let inv = sub.try_inverse()?;
+    let mut cov = DMatrix::zeros(k, k);
+    for i in 0..k {
+        cov[(i, i)] = f64::INFINITY;
+    }
+    for (r, &i) in keep.iter().enumerate() {
+        for (c, &j) in keep.iter().enumerate() {
+            cov[(i, j)] = inv[(r, c)];
+        }
+    }
+    Some(cov)
 }
 
 /// Cost knobs of [`fit`].
@@ -591,8 +1018,9 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         convert(x0, richest, full, x0[2])
     };
     // Robust loop on the richest model allowed.
+    let mut ev_full = None;
     for _round in 0..settings.robust_rounds.max(1) {
-        let (xf, model) = model_fit(pb, full.0, full.1, &x, use_.clone(), settings);
+        let (xf, ev, model) = model_fit(pb, full.0, full.1, &x, use_.clone(), settings);
         x = xf;
         // Normalised residuals of all samples (inliers and outliers).
         let geom1 = full
@@ -626,6 +1054,7 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         let cut = (4.0 * s).max(3.0);
         let new: [Vec<bool>; 3] = [0, 1, 2].map(|g| res[g].iter().map(|v| v.abs() < cut).collect());
         if new == use_ {
+            ev_full = Some(ev);
             break;
         }
         use_ = new;
@@ -643,13 +1072,15 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         m2: full.1,
         use_: use_.clone(),
     };
-    let (r_full, b_full) = model_full.residuals(&x);
+    // The last fit's evaluation holds when its inliers did not change, else evaluate afresh.
+    let ev_full = ev_full.unwrap_or_else(|| model_full.eval(&x, true));
+    let (r_full, b_full) = (&ev_full.r, ev_full.bounds);
     let n_obs = r_full.len() - b_full[1];
     let k_full = model_full.n_params();
     let chi_full: f64 = r_full[b_full[1]..].iter().map(|v| v * v).sum();
     let s2_ref = (chi_full / (n_obs.saturating_sub(k_full)).max(1) as f64).max(1e-12);
     let corr_ref = {
-        let (r, b) = model_full.residuals(&x);
+        let (r, b) = (r_full, b_full);
         let mut acc = 0.0;
         let mut n = 0.0;
         for g in 1..4 {
@@ -671,38 +1102,26 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     } else {
         vec![(None, PathModel::Line), (None, PathModel::ParabolaLine)]
     };
-    let mut best: Option<(f64, Vec<f64>, Combo)> = None;
+    let mut ev_full = Some(ev_full);
+    let mut best: Option<(f64, Vec<f64>, Combo, Eval)> = None;
     for c in combos {
-        let xs = if c == full {
-            x.clone()
+        let (xs, ev, k) = if c == full {
+            (x.clone(), ev_full.take().expect("one full combo"), k_full)
         } else {
             let start = convert(&x, full, c, x[2]);
-            model_fit(pb, c.0, c.1, &start, use_.clone(), settings).0
+            let (xs, ev, model) = model_fit(pb, c.0, c.1, &start, use_.clone(), settings);
+            (xs, ev, model.n_params())
         };
-        let model = Model {
-            pb,
-            m1: c.0,
-            m2: c.1,
-            use_: use_.clone(),
-        };
-        let (r, b) = model.residuals(&xs);
-        let chi: f64 = r[b[1]..].iter().map(|v| v * v).sum();
+        let chi: f64 = ev.r[ev.bounds[1]..].iter().map(|v| v * v).sum();
         // Neighbouring samples are correlated: count independent information only.
-        let bic =
-            chi / (s2_ref * corr_ref) + model.n_params() as f64 * (n_obs as f64 / corr_ref).ln();
+        let bic = chi / (s2_ref * corr_ref) + k as f64 * (n_obs as f64 / corr_ref).ln();
         if best.as_ref().is_none_or(|b| bic < b.0) {
-            best = Some((bic, xs, c));
+            best = Some((bic, xs, c, ev));
         }
     }
-    let (bic, xb, cb) = best?;
-    let model = Model {
-        pb,
-        m1: cb.0,
-        m2: cb.1,
-        use_: use_.clone(),
-    };
-    let (r, bounds) = model.residuals(&xb);
-    let mut j = model.jacobian(&xb, &bounds);
+    let (bic, xb, cb, ev) = best?;
+    let Eval { r, bounds, j } = ev;
+    let j = j.expect("evaluated with the Jacobian");
     let mut s2 = [1.0; 3];
     let mut corr = [1.0; 3];
     for g in 0..3 {
@@ -718,14 +1137,16 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         s2[g] = (rows.iter().map(|v| v * v).sum::<f64>() / (rows.len() as f64 - k_g).max(1.0))
             .max(1e-6);
         corr[g] = correlation_factor(rows);
-        let scale = 1.0 / (s2[g] * corr[g]).sqrt();
-        for i in bounds[g + 1]..bounds[g + 2] {
-            for c in 0..j.ncols() {
-                j[(i, c)] *= scale;
-            }
-        }
     }
-    let cov = (j.transpose() * &j).try_inverse()?;
+    // Rows of group g divided by sqrt(s_g² f_g): weights 1 / (s_g² f_g) in J'ᵀ J'.
+    let w = [
+        1.0,
+        1.0 / (s2[0] * corr[0]),
+        1.0 / (s2[1] * corr[1]),
+        1.0 / (s2[2] * corr[2]),
+    ];
+    let (a, _) = normal_equations(&j, &r, &bounds, &group_cols(cb.0, cb.1), w);
+    let cov = covariance(&a)?;
     Some(JointFit {
         params: xb,
         cov,
@@ -736,4 +1157,309 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         corr,
         bic,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic xorshift in [0, 1): the tests need no seeded-RNG plumbing.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, a: f64, b: f64) -> f64 {
+            a + (b - a) * self.next()
+        }
+    }
+
+    /// Samples along a path (from `geom`, arc positions `0..len`, scattered `spread` px across
+    /// it), plus one a hair past the Bézier/ray junction and one behind the start.
+    fn samples_along(
+        geom: &PathGeom,
+        len: f64,
+        n: usize,
+        spread: f64,
+        rng: &mut Rng,
+    ) -> Vec<Sample> {
+        let poly = geom.polyline(len);
+        let mut out = Vec::new();
+        let mut pts: Vec<(f64, f64)> = Vec::new();
+        for w in poly.windows(2) {
+            let seg = (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1);
+            let m = ((n as f64) * seg / len).ceil().max(1.0) as usize;
+            for i in 0..m {
+                let f = (i as f64 + rng.next()) / m as f64;
+                pts.push((
+                    w[0].0 + f * (w[1].0 - w[0].0),
+                    w[0].1 + f * (w[1].1 - w[0].1),
+                ));
+            }
+        }
+        let n1 = (-geom.u1.1, geom.u1.0);
+        pts.push((
+            geom.end.0 + 1e-3 * geom.u1.0 + 0.7 * n1.0,
+            geom.end.1 + 1e-3 * geom.u1.1 + 0.7 * n1.1,
+        ));
+        pts.push((
+            geom.start.0 - 3.0 * geom.u0.0 + 0.4 * n1.0,
+            geom.start.1 - 3.0 * geom.u0.1 + 0.4 * n1.1,
+        ));
+        for p in pts {
+            let n = (rng.range(-1.0, 1.0) * spread, rng.range(-1.0, 1.0) * spread);
+            out.push(Sample {
+                x: p.0 + n.0,
+                y: p.1 + n.1,
+                sigma: rng.range(0.05, 0.5),
+                amp: 1.0,
+            });
+        }
+        out
+    }
+
+    /// A shot in the `parabola+line` layout with both balls moving.
+    fn truth(rng: &mut Rng) -> Vec<f64> {
+        let r = rng.range(60.0, 120.0);
+        let sign = |rng: &mut Rng| if rng.next() < 0.5 { -1.0 } else { 1.0 };
+        let d1 = rng.range(-1.3, 1.3);
+        let d2 = rng.range(-1.0, 1.0);
+        vec![
+            rng.range(900.0, 1500.0),
+            rng.range(600.0, 1000.0),
+            r,
+            rng.range(-3.1, 3.1),
+            rng.range(-1.2, 1.2),
+            d1,
+            d1 + rng.range(-0.6, 0.6),
+            sign(rng) * rng.range(0.5, 3.0) * r,
+            sign(rng) * rng.range(0.5, 3.0) * r,
+            d2,
+            d2 + rng.range(-0.3, 0.3),
+            sign(rng) * rng.range(0.5, 3.0) * r,
+            sign(rng) * rng.range(0.5, 3.0) * r,
+        ]
+    }
+
+    fn problem(x: &[f64], spread: f64, rng: &mut Rng) -> Problem {
+        let pi = impact_point(x);
+        let back = unit(x[3] + x[4]);
+        let incoming = (0..60)
+            .map(|i| {
+                let a = -(i as f64 + 1.0) * 8.0 - 2.0 * x[2];
+                Sample {
+                    x: pi.0 + a * back.0 + rng.range(-1.0, 1.0) * spread,
+                    y: pi.1 + a * back.1 + rng.range(-1.0, 1.0) * spread,
+                    sigma: rng.range(0.05, 0.5),
+                    amp: 1.0,
+                }
+            })
+            .collect();
+        let g1 = PathGeom::new(PathModel::ParabolaLine, pi, x[3], &x[5..9]);
+        let g2 = PathGeom::new(PathModel::ParabolaLine, (x[0], x[1]), x[3], &x[9..13]);
+        Problem {
+            o_meas: (x[0] + 0.3, x[1] - 0.2),
+            sigma_o: 0.5,
+            r_meas: x[2] + 0.4,
+            sigma_r: 0.5,
+            incoming,
+            out1: Some(samples_along(&g1, 900.0, 80, spread, rng)),
+            out2: samples_along(&g2, 900.0, 80, spread, rng),
+        }
+    }
+
+    fn combos(with_cue: bool) -> Vec<Combo> {
+        let ms = [PathModel::Line, PathModel::ParabolaLine];
+        if with_cue {
+            ms.iter()
+                .flat_map(|a| ms.iter().map(move |b| (Some(*a), *b)))
+                .collect()
+        } else {
+            ms.iter().map(|b| (None, *b)).collect()
+        }
+    }
+
+    #[test]
+    fn analytic_jacobian_matches_central_differences() {
+        let mut rng = Rng(0x5eed_1234_abcd_0001);
+        let mut checked = 0;
+        for case in 0..12 {
+            let xt = truth(&mut rng);
+            let mut pb = problem(&xt, 3.0, &mut rng);
+            let with_cue = case % 3 != 2;
+            if !with_cue {
+                pb.out1 = None;
+            }
+            let richest = (
+                with_cue.then_some(PathModel::ParabolaLine),
+                PathModel::ParabolaLine,
+            );
+            let x0: Vec<f64> = if with_cue {
+                xt.clone()
+            } else {
+                [&xt[..5], &xt[9..]].concat()
+            };
+            for c in combos(with_cue) {
+                // Evaluate away from the truth so residuals are not all small.
+                let mut x = convert(&x0, richest, c, x0[2]);
+                for (i, v) in x.iter_mut().enumerate() {
+                    *v += match i {
+                        0..=2 => rng.range(-2.0, 2.0),
+                        3..=4 => rng.range(-0.02, 0.02),
+                        _ => rng.range(-0.02, 0.02) * if v.abs() > 10.0 { 100.0 } else { 1.0 },
+                    };
+                }
+                let use_ = [
+                    vec![true; pb.incoming.len()],
+                    vec![true; pb.out1.as_ref().map_or(0, |v| v.len())],
+                    vec![true; pb.out2.len()],
+                ];
+                let model = Model {
+                    pb: &pb,
+                    m1: c.0,
+                    m2: c.1,
+                    use_,
+                };
+                let ja = model.eval(&x, true).j.unwrap().to_dmatrix();
+                let jn = model.jacobian_numeric(&x);
+                assert_eq!(ja.shape(), jn.shape());
+                for col in 0..ja.ncols() {
+                    let scale = jn.column(col).amax();
+                    assert!(scale > 0.0, "case {case} {c:?}: column {col} all zero");
+                    for row in 0..ja.nrows() {
+                        let (a, n) = (ja[(row, col)], jn[(row, col)]);
+                        // The floor covers the differences' own rounding (~1e-16 |r| / h).
+                        assert!(
+                            (a - n).abs() <= 1e-5 * n.abs().max(1e-3 * scale) + 1e-6,
+                            "case {case} {c:?} row {row} col {col}: analytic {a} numeric {n}"
+                        );
+                    }
+                }
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 8 * 4 + 4 * 2);
+    }
+
+    #[test]
+    fn bezier_foot_is_the_global_nearest_point() {
+        let mut rng = Rng(0x0b0e_2e11_f00d_0002);
+        for _ in 0..20000 {
+            let p = [
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+                rng.range(-120.0, 280.0),
+                rng.range(-120.0, 280.0),
+            ];
+            let g = PathGeom::new(
+                PathModel::ParabolaLine,
+                (1000.0, 800.0),
+                rng.range(-3.1, 3.1),
+                &p,
+            );
+            let b = g.bezier(rng.next());
+            let spread = [5.0, 50.0, 1000.0][(rng.next() * 3.0) as usize];
+            let q = (
+                b.0 + rng.range(-spread, spread),
+                b.1 + rng.range(-spread, spread),
+            );
+            let dist = |t: f64| {
+                let b = g.bezier(t);
+                (b.0 - q.0).hypot(b.1 - q.1)
+            };
+            // Brute force: a fine scan, then golden-section refinement around its best.
+            let n = 4000;
+            let i = (0..=n)
+                .min_by(|a, b| dist(*a as f64 / n as f64).total_cmp(&dist(*b as f64 / n as f64)))
+                .unwrap();
+            let (mut lo, mut hi) = (
+                ((i as f64 - 1.0) / n as f64).max(0.0),
+                ((i as f64 + 1.0) / n as f64).min(1.0),
+            );
+            for _ in 0..200 {
+                let (m1, m2) = (lo + 0.381966 * (hi - lo), hi - 0.381966 * (hi - lo));
+                if dist(m1) < dist(m2) {
+                    hi = m2;
+                } else {
+                    lo = m1;
+                }
+            }
+            let best = dist(0.5 * (lo + hi));
+            let t = g.bezier_foot(q);
+            assert!((0.0..=1.0).contains(&t));
+            assert!(
+                dist(t) <= best + 1e-9,
+                "p={p:?} q={q:?}: foot {t} at {} px, brute force {best} px",
+                dist(t)
+            );
+        }
+    }
+
+    #[test]
+    fn covariance_of_an_undetermined_parameter_is_infinite() {
+        // Parameter 1 enters no residual; 0 and 2 are correlated.
+        let a = DMatrix::from_row_slice(3, 3, &[4.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 2.0]);
+        let cov = covariance(&a).unwrap();
+        assert!(cov[(1, 1)].is_infinite());
+        assert!(cov[(0, 1)].abs() < 1e-300);
+        // Inverse of [[4, 1], [1, 2]] = [[2, -1], [-1, 4]] / 7.
+        assert!((cov[(0, 0)] - 2.0 / 7.0).abs() < 1e-15);
+        assert!((cov[(0, 2)] + 1.0 / 7.0).abs() < 1e-15);
+        assert!((cov[(2, 2)] - 4.0 / 7.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn fit_recovers_a_shot_and_picks_its_path_models() {
+        let mut rng = Rng(0xfeed_beef_0003);
+        for _ in 0..3 {
+            // Cue ball: a clear sliding parabola; object ball: a straight line.
+            let mut xt = truth(&mut rng);
+            xt[6] = xt[5] + 0.4;
+            xt[7] = 1.5 * xt[2];
+            xt[8] = 1.5 * xt[2];
+            xt[10] = xt[9];
+            let mut pb = problem(&xt, 0.02, &mut rng);
+            // Drop the two probe samples (junction, behind the start) from each ball.
+            for v in [pb.out1.as_mut().unwrap(), &mut pb.out2] {
+                v.truncate(v.len() - 2);
+            }
+            // Unbiased disc priors (`problem` offsets them for the Jacobian test).
+            pb.o_meas = (xt[0], xt[1]);
+            pb.r_meas = xt[2];
+            let mut x0 = xt.clone();
+            for (i, v) in x0.iter_mut().enumerate() {
+                *v += match i {
+                    0..=2 => 0.5,
+                    3..=6 | 9 | 10 => 0.01,
+                    _ => 0.1 * *v,
+                };
+            }
+            let f = fit(&pb, &x0, &FitSettings::default()).expect("fit");
+            assert_eq!(f.m1, Some(PathModel::ParabolaLine));
+            assert_eq!(f.m2, PathModel::Line);
+            let (d1, t1) = f.angle_indices(1).unwrap();
+            let (d2, t2) = f.angle_indices(2).unwrap();
+            assert_eq!(d2, t2);
+            // 0.02 px of noise on ~80 samples a path: thousandths of a degree for directions,
+            // hundredths for the start tangent of a short parabola.
+            for (name, got, want, tol_deg) in [
+                ("alpha", f.alpha(), xt[3], 0.01),
+                ("psi_s", f.psi_s(), xt[4], 0.01),
+                ("delta1", f.params[d1], xt[5], 0.1),
+                ("theta1", f.params[t1], xt[6], 0.01),
+                ("theta2", f.params[t2], xt[10], 0.01),
+            ] {
+                assert!(
+                    (got - want).abs() < f64::to_radians(tol_deg),
+                    "{name}: {:.4}° off",
+                    (got - want).to_degrees()
+                );
+            }
+            assert!((f.o().0 - xt[0]).abs() < 0.05 && (f.r() - xt[2]).abs() < 0.05);
+            assert!(f.sd(t1).is_finite() && f.sd(t1) > 0.0);
+        }
+    }
 }
