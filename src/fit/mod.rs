@@ -385,7 +385,16 @@ fn shot_data(i: usize, r: &ShotRow, opts: &FitOptions) -> std::result::Result<Sh
     if !(0.0..90.0).contains(&psi) {
         return Err(format!("psi_deg = {psi} is outside [0, 90)"));
     }
-    let meas = [r.delta1_deg, r.delta2_deg, r.theta1_deg, r.theta2_deg];
+    // A straight-line path model reports delta = theta: the start tangent was not measured
+    // separately (the sliding arc was too short to see), so it carries no information of its
+    // own, and using it would count theta twice and impose delta = theta on the model.
+    let line = |m: &Option<String>| m.as_deref() == Some("line");
+    let meas = [
+        r.delta1_deg.filter(|_| !line(&r.path_model1)),
+        r.delta2_deg.filter(|_| !line(&r.path_model2)),
+        r.theta1_deg,
+        r.theta2_deg,
+    ];
     if meas.iter().all(Option::is_none) {
         return Err("no angle measured".into());
     }

@@ -189,6 +189,9 @@ fn kasa(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     (r2 > 0.0).then(|| (cx + mx, cy + my, r2.sqrt()))
 }
 
+const W0: f64 = 1.5;
+const W1: f64 = 3.5;
+
 /// Radius (along one ray) where the profile crosses the mean of the inside and outside levels
 /// extrapolated to the steepest-descent edge `re0`; `None` when the window leaves the profile.
 fn half_level_crossing(prof: &[f32], r_in: f64, step: f64, re0: f64) -> Option<f64> {
@@ -208,8 +211,8 @@ fn half_level_crossing(prof: &[f32], r_in: f64, step: f64, re0: f64) -> Option<f
         let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
         Some(my + b * (re0 - mx))
     };
-    let inner = level(re0 - 6.0, re0 - 2.0)?;
-    let outer = level(re0 + 2.0, re0 + 6.0)?;
+    let inner = level(re0 - W1, re0 - W0)?;
+    let outer = level(re0 + W0, re0 + W1)?;
     if inner <= outer {
         return None;
     }
@@ -287,7 +290,8 @@ pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
             // The steepest descent sits inside the silhouette when the ball's limb is darker
             // than its centre (shading): take the edge where the profile crosses half-way between
             // the levels just inside and just outside, each extrapolated to the edge by a line
-            // through 2–6 px on its side.
+            // through 1.5–3.5 px on its side (as close as the 1-px antialiased edge allows: the
+            // limb of a shaded ball falls off like a square root, which a wider window misjudges).
             let re = half_level_crossing(&prof, r_in, step, re0).unwrap_or(re0);
             let inside: f32 = prof[..n_s / 5].iter().sum::<f32>() / (n_s / 5) as f32;
             let outside: f32 = prof[n_s - n_s / 6..].iter().sum::<f32>() / (n_s / 6) as f32;
