@@ -205,7 +205,9 @@ fn half_level_crossing(prof: &[f32], r_in: f64, step: f64, re0: f64) -> Option<f
             .map(|i| (r_in + step * i as f64, prof[i] as f64))
             .collect();
         let n = pts.len() as f64;
-        let (mx, my) = pts.iter().fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
+        let (mx, my) = pts
+            .iter()
+            .fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
         let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
         let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
         let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };

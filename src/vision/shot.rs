@@ -338,10 +338,7 @@ fn path_starts(
             if l1 <= 0.05 * r {
                 continue;
             }
-            let c = (
-                far.p.0 + s_c * u1.0 - 0.0,
-                far.p.1 + s_c * u1.1,
-            );
+            let c = (far.p.0 + s_c * u1.0 - 0.0, far.p.1 + s_c * u1.1);
             let d0 = wrap((c.1 - start.1).atan2(c.0 - start.0) - alpha);
             cands.push((d0, theta, l0, l1));
         }
@@ -355,7 +352,11 @@ fn path_starts(
         );
         samples
             .iter()
-            .map(|s| (g.signed_distance((s.x, s.y)) / s.sigma.max(0.05)).powi(2).min(1e4))
+            .map(|s| {
+                (g.signed_distance((s.x, s.y)) / s.sigma.max(0.05))
+                    .powi(2)
+                    .min(1e4)
+            })
             .sum()
     };
     let chord = cands[cands.len().min(2) - 1];
@@ -414,7 +415,10 @@ fn read_scene(
             let miss2 = (l2.d.0 * (o.1 - l2.p.1) - l2.d.1 * (o.0 - l2.p.0)).abs();
             if t2.abs() > 35f64.to_radians() || miss2 > 1.5 * r {
                 if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-                    eprintln!("inc {inc} b2 {b2}: t2 {:.1}° miss2 {miss2:.1}", t2.to_degrees());
+                    eprintln!(
+                        "inc {inc} b2 {b2}: t2 {:.1}° miss2 {miss2:.1}",
+                        t2.to_degrees()
+                    );
                 }
                 continue;
             }
@@ -487,8 +491,14 @@ fn disc_colour(sig: &Signal, o: (f64, f64), r: f64) -> [f32; 3] {
     let f = sig.f as f64;
     let (cx, cy, rc) = (o.0 / f - 0.5, o.1 / f - 0.5, 0.5 * r / f);
     let mut acc = [0f64; 3];
-    let (y0, y1) = ((cy - rc).floor().max(0.0) as usize, (cy + rc).ceil() as usize);
-    let (x0, x1) = ((cx - rc).floor().max(0.0) as usize, (cx + rc).ceil() as usize);
+    let (y0, y1) = (
+        (cy - rc).floor().max(0.0) as usize,
+        (cy + rc).ceil() as usize,
+    );
+    let (x0, x1) = (
+        (cx - rc).floor().max(0.0) as usize,
+        (cx + rc).ceil() as usize,
+    );
     for y in y0..=y1.min(sig.ch - 1) {
         for x in x0..=x1.min(sig.cw - 1) {
             if (x as f64 - cx).hypot(y as f64 - cy) <= rc {
@@ -695,7 +705,9 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
                 a.y,
                 b.x,
                 b.y,
-                k.iter().map(|q| (q.x as i32, q.y as i32)).collect::<Vec<_>>()
+                k.iter()
+                    .map(|q| (q.x as i32, q.y as i32))
+                    .collect::<Vec<_>>()
             );
         }
     }
@@ -882,7 +894,8 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
             let a = fit.alpha() + fit.psi_s();
             (a.cos(), a.sin())
         };
-        let rms = |v: Vec<f64>| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
+        let rms =
+            |v: Vec<f64>| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
         let inl = |g: usize, v: &[Sample]| -> Vec<(f64, f64)> {
             v.iter()
                 .zip(&fit.inliers[g])
@@ -890,18 +903,19 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
                 .map(|(q, _)| (q.x, q.y))
                 .collect()
         };
-        let inc = rms(
-            inl(0, &pb.incoming)
-                .iter()
-                .map(|q| u.0 * (q.1 - pi.1) - u.1 * (q.0 - pi.0))
-                .collect(),
-        );
+        let inc = rms(inl(0, &pb.incoming)
+            .iter()
+            .map(|q| u.0 * (q.1 - pi.1) - u.1 * (q.0 - pi.0))
+            .collect());
         let cue = match (fit.geom1(), &pb.out1) {
             (Some(g), Some(v)) => rms(inl(1, v).iter().map(|q| g.signed_distance(*q)).collect()),
             _ => 0.0,
         };
         let g2 = fit.geom2();
-        let obj = rms(inl(2, &pb.out2).iter().map(|q| g2.signed_distance(*q)).collect());
+        let obj = rms(inl(2, &pb.out2)
+            .iter()
+            .map(|q| g2.signed_distance(*q))
+            .collect());
         [inc, cue, obj]
     };
     if std::env::var_os("STREAKFIT_DEBUG").is_some() {

@@ -192,7 +192,11 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
                     }
                     q += 0.5;
                 }
-                if 2 * n >= tot { acc / n as f64 } else { f64::NEG_INFINITY }
+                if 2 * n >= tot {
+                    acc / n as f64
+                } else {
+                    f64::NEG_INFINITY
+                }
             };
             let n_dir = 341;
             let angs: Vec<f64> = (0..n_dir)
@@ -502,7 +506,9 @@ impl Template {
         let mean: Vec<f64> = acc.iter().zip(&cnt).map(|(a, c)| a / c).collect();
         // Symmetrise (the swept silhouette is symmetric about the centre-line), smooth with a
         // 1-px box (sub-pixel alignment noise), and pin the tails to zero beyond the edge.
-        let sym: Vec<f64> = (0..nb).map(|i| 0.5 * (mean[i] + mean[nb - 1 - i])).collect();
+        let sym: Vec<f64> = (0..nb)
+            .map(|i| 0.5 * (mean[i] + mean[nb - 1 - i]))
+            .collect();
         let k = (0.5 / h).round() as usize;
         let mut vals: Vec<f64> = (0..nb)
             .map(|i| {
