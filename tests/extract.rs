@@ -115,9 +115,12 @@ fn clean_tier_accuracy() {
         assert!(["line", "parabola+line"].contains(&r.path_model2.as_deref().unwrap()));
     }
     let m = |k: &str| median(errs[k].clone());
-    assert!(m("radius") < 0.3, "radius median error {}", m("radius"));
-    assert!(m("psi") < 0.6, "psi median error {}", m("psi"));
-    assert!(m("theta1") < 1.0, "theta1 median error {}", m("theta1"));
+    assert!(m("radius") < 0.1, "radius median error {}", m("radius"));
+    // Regression guards at about 3× the values measured on this set (2026-11-22: psi 0.089°,
+    // theta1 0.077°, theta2 0.45°, delta2 0.55°; grazing shots with short object-ball streaks
+    // dominate theta2); README's table gives the accuracy on larger sets.
+    assert!(m("psi") < 0.3, "psi median error {}", m("psi"));
+    assert!(m("theta1") < 0.3, "theta1 median error {}", m("theta1"));
     assert!(m("theta2") < 0.6, "theta2 median error {}", m("theta2"));
     assert!(m("delta2") < 0.8, "delta2 median error {}", m("delta2"));
 }
@@ -128,9 +131,10 @@ fn realistic_tier_accuracy() {
     let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
     assert!(ok >= 4, "ok {ok}/6: {rows:#?}");
     let m = |k: &str| median(errs[k].clone());
-    assert!(m("psi") < 1.5, "psi median error {}", m("psi"));
-    assert!(m("theta1") < 2.0, "theta1 median error {}", m("theta1"));
-    assert!(m("theta2") < 1.5, "theta2 median error {}", m("theta2"));
+    // Measured 2026-11-22: psi 0.26°, theta1 0.29°, theta2 0.20°.
+    assert!(m("psi") < 0.8, "psi median error {}", m("psi"));
+    assert!(m("theta1") < 0.9, "theta1 median error {}", m("theta1"));
+    assert!(m("theta2") < 0.6, "theta2 median error {}", m("theta2"));
 }
 
 #[test]
@@ -220,7 +224,9 @@ fn one_row_per_image_with_bad_files_shards_and_overlays() {
 #[test]
 fn plate_is_not_a_shot_and_is_used() {
     let dir = scratch("plate");
-    synth(&dir, "clean", 2, 7, &["--background"]);
+    // Grazing shots beyond 70° can leave an object-ball streak too short to read (declined with
+    // the reason); this test is about the plate, so it keeps to ordinary shots.
+    synth(&dir, "clean", 2, 7, &["--background", "--psi", "15:70"]);
     let out = dir.join("angles.csv");
     extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
     let rows = read_angle_table(&out).unwrap();

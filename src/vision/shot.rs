@@ -544,6 +544,9 @@ fn disc_at(sig: &Signal, p: (f64, f64), r: f64, contrast: f64, ring_level: f64) 
 /// Validated on an independent seed (`docs/accuracy.sh`, README).
 pub const SIGMA_CALIBRATION: f64 = 2.0;
 
+/// Largest stated 1-sigma of psi (degrees) for which a shot is reported `ok`.
+pub const PSI_RESOLVED_DEG: f64 = 1.5;
+
 /// Analyses one photo. `plate` is the empty-table background, when known.
 pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions) -> Analysis {
     let sat = background::saturated_fraction(img);
@@ -927,6 +930,18 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     let deg = |v: f64| v.to_degrees();
     out.psi_deg = Some(deg(psi_s.abs()));
     out.psi_err_deg = Some(deg(SIGMA_CALIBRATION * fit.sd(4)));
+    // psi carries every other angle's frame: a shot whose impact geometry is this uncertain
+    // measures nothing useful (on the synthetic sets such rows were also the wrong readings).
+    if SIGMA_CALIBRATION * fit.sd(4) > PSI_RESOLVED_DEG.to_radians() {
+        out.status = Status::Declined;
+        out.reason = format!(
+            "impact geometry not resolved: psi = {:.1}° ± {:.1}° (more than {PSI_RESOLVED_DEG}°)",
+            deg(psi_s.abs()),
+            deg(SIGMA_CALIBRATION * fit.sd(4))
+        );
+        out.fit = Some(fit);
+        return out;
+    }
     // An angle whose fit uncertainty exceeds this is not measured (the sliding arc is hidden
     // where the streaks overlap near the impact): it is reported as undefined, with the reason.
     let unresolved = 10f64.to_radians();

@@ -174,16 +174,17 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
             } else {
                 sig.u
             };
-            // Direction: the line from the seed outward (away from the disc, where the other
-            // streaks join) that carries the most light, a one-sided local Radon transform over
-            // 5 R. Every streak passes within 2R of O, so at the ring it points within 85° of
-            // the radial direction.
+            // Direction: the line through the seed (±2R) that carries the most light, a local
+            // Radon transform. Both sides lie on the streak (it runs from near the disc outward)
+            // and stay 2R clear of the disc; a bright end (a ball come to rest) on one side
+            // cannot swing the line. Every streak passes within 2R of O, so at the ring it
+            // points within 85° of the radial direction.
             let radial = (phi.cos(), phi.sin());
-            let reach = 5.0 * rc;
+            let reach = 2.0 * rc;
             let line_mean = |a: f64| -> f64 {
                 let (ca, sa) = (a.cos(), a.sin());
                 let (mut acc, mut n, mut tot) = (0.0f64, 0usize, 0usize);
-                let mut q = 0.5 * rc;
+                let mut q = -reach;
                 while q <= reach {
                     tot += 1;
                     if let Some(v) = at(seed.0 + q * ca, seed.1 + q * sa) {
