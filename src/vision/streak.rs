@@ -830,6 +830,9 @@ impl Exclusion {
     }
 }
 
+/// One re-measured profile: its point, the streak direction there, the profile and its centre.
+type Measured = ((f64, f64), (f64, f64), Profile, ProfileCentre);
+
 /// Re-measures a streak's centre-line at its samples with other balls' light excluded, and
 /// extends it towards `start` (the impact or the disc) while the core stays clean. Centroids
 /// first; then two rounds of the streak's own [`Template`] fitted to every profile.
@@ -852,8 +855,8 @@ pub fn remeasure(
         let l = dx.hypot(dy).max(1e-9);
         (dx / l, dy / l)
     };
-    // (profile point, direction, profile, centre), ordered from the start outward.
-    let mut entries: Vec<((f64, f64), (f64, f64), Profile, ProfileCentre)> = Vec::new();
+    // Ordered from the start outward.
+    let mut entries: Vec<Measured> = Vec::new();
     let snr_of = |pc: &ProfileCentre| pc.amp / (pc.noise / pc.n_core.sqrt());
     // Inward extension, from the first sample back towards the start point.
     if n >= 2 {
