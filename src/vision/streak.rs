@@ -551,106 +551,118 @@ impl Template {
     /// baseline absorbs cloth blotches of the streak's own size, so the centre comes from the
     /// sharp parts of the shape; its standard error is from the fit's own residual scatter.
     pub fn fit(&self, pr: &Profile, c0: f64, r: f64, n_a: usize) -> Option<ProfileCentre> {
-        let mut c = c0;
-        let mut out = None;
+        const K: usize = BASELINE_DEGREE + 3;
         let scale = 1.0 / (1.7 * r);
-        for _it in 0..8 {
-            let (mut nl, mut nr) = (0usize, 0usize);
-            for (tk, b) in pr.t.iter().zip(&pr.bad) {
-                if *b {
-                    if (tk - c).abs() < 1.2 * r {
-                        return None;
-                    }
-                    continue;
+        // With one flank only, a constant baseline (a slope would trade off with the shape).
+        let (mut nl, mut nr) = (0usize, 0usize);
+        for (tk, b) in pr.t.iter().zip(&pr.bad) {
+            if *b {
+                if (tk - c0).abs() < 1.2 * r {
+                    return None;
                 }
-                if tk - c <= -1.15 * r {
-                    nl += 1;
-                }
-                if tk - c >= 1.15 * r {
-                    nr += 1;
-                }
+                continue;
             }
-            // With one flank only, a constant baseline (a slope would trade off with the shape).
-            let deg = if (nl as f64) < 0.15 * r || (nr as f64) < 0.15 * r {
-                0
-            } else {
-                BASELINE_DEGREE
-            };
-            let k = 2 + deg + 1;
-            let mut rows: Vec<(f64, [f64; 10])> = Vec::with_capacity(pr.t.len());
-            let mut ata = nalgebra::DMatrix::<f64>::zeros(k, k);
-            let mut atb = nalgebra::DVector::<f64>::zeros(k);
-            // Linear parameters at this c first: A and the baseline.
+            nl += usize::from(tk - c0 <= -1.15 * r);
+            nr += usize::from(tk - c0 >= 1.15 * r);
+        }
+        let deg = if (nl as f64) < 0.15 * r || (nr as f64) < 0.15 * r {
+            0
+        } else {
+            BASELINE_DEGREE
+        };
+        let k = deg + 3;
+        // Baseline basis per sample (fixed while c moves).
+        let rows: Vec<(f64, f64, [f64; K])> =
+            pr.t.iter()
+                .zip(&pr.v)
+                .zip(&pr.bad)
+                .filter(|(_, b)| !**b)
+                .map(|((tk, vk), _)| {
+                    let mut f = [0.0; K];
+                    let z = tk * scale;
+                    let mut zp = 1.0;
+                    for q in 0..=deg {
+                        f[2 + q] = zp;
+                        zp *= z;
+                    }
+                    (*tk, *vk, f)
+                })
+                .collect();
+        let n = rows.len() as f64;
+        // Parameters: [c, A, b_0..b_deg]; Gauss–Newton from the linear solution at c0.
+        let mut p = [0.0; K];
+        p[0] = c0;
+        {
             let mut m = nalgebra::DMatrix::<f64>::zeros(k - 1, k - 1);
             let mut rv = nalgebra::DVector::<f64>::zeros(k - 1);
-            for ((tk, vk), b) in pr.t.iter().zip(&pr.v).zip(&pr.bad) {
-                if *b {
-                    continue;
-                }
-                let (tv, tg) = self.at(tk - c);
-                let mut f = [0.0; 10];
-                f[1] = tv;
-                let z = tk * scale;
-                let mut zp = 1.0;
-                for q in 0..=deg {
-                    f[2 + q] = zp;
-                    zp *= z;
-                }
+            for (tk, vk, f) in &rows {
+                let mut g = *f;
+                g[1] = self.at(tk - c0).0;
                 for a in 1..k {
-                    rv[a - 1] += f[a] * vk;
-                    for bb in 1..k {
-                        m[(a - 1, bb - 1)] += f[a] * f[bb];
+                    rv[a - 1] += g[a] * vk;
+                    for bb in a..k {
+                        m[(a - 1, bb - 1)] += g[a] * g[bb];
                     }
                 }
-                f[0] = tg;
-                rows.push((*vk, f));
             }
+            m.fill_lower_triangle_with_upper_triangle();
             let lin = m.cholesky()?.solve(&rv);
-            let a = lin[0];
-            if a <= 0.0 {
+            p[1..k].copy_from_slice(&lin.as_slice()[..k - 1]);
+        }
+        let mut last = None;
+        for _it in 0..8 {
+            if p[1] <= 0.0 {
                 return None;
             }
+            let mut ata = nalgebra::DMatrix::<f64>::zeros(k, k);
+            let mut atb = nalgebra::DVector::<f64>::zeros(k);
             let mut sse = 0.0;
-            for (vk, f) in &rows {
-                let model: f64 = (1..k).map(|q| lin[q - 1] * f[q]).sum();
+            for (tk, vk, f) in &rows {
+                let (tv, tg) = self.at(tk - p[0]);
+                let mut j = *f;
+                j[0] = -p[1] * tg;
+                j[1] = tv;
+                let model: f64 = (1..k).map(|q| p[q] * j[q]).sum();
                 let e = vk - model;
-                let mut j = [0.0; 10];
-                j[0] = -a * f[0];
-                j[1..k].copy_from_slice(&f[1..k]);
-                for p in 0..k {
-                    atb[p] += j[p] * e;
-                    for q in 0..k {
-                        ata[(p, q)] += j[p] * j[q];
+                for a in 0..k {
+                    atb[a] += j[a] * e;
+                    for bb in a..k {
+                        ata[(a, bb)] += j[a] * j[bb];
                     }
                 }
                 sse += e * e;
             }
-            let n = rows.len() as f64;
+            ata.fill_lower_triangle_with_upper_triangle();
             let chol = ata.cholesky()?;
             let step = chol.solve(&atb);
-            let s2 = sse / (n - k as f64).max(1.0);
-            let var_c = chol.inverse()[(0, 0)] * s2;
             let dc = step[0].clamp(-0.25 * r, 0.25 * r);
-            // The baseline's value and slope at t = 0 (for the template of the next round).
-            let (b0, b1) = (lin[1], if deg >= 1 { lin[2] * scale } else { 0.0 });
-            out = Some(ProfileCentre {
-                c: c + dc,
-                sigma: var_c.max(0.0).sqrt().max(1e-3),
-                amp: a * self.peak_mean(),
-                noise: s2.sqrt(),
-                n_core: 2.2 * r * n_a as f64,
-                b0,
-                b1,
-            });
-            c += dc;
-            if dc.abs() < 1e-3 {
+            let done = dc.abs() < 1e-3;
+            last = Some((chol, sse));
+            p[0] += dc;
+            for q in 1..k {
+                p[q] += step[q];
+            }
+            if done {
                 break;
             }
-            if (c - c0).abs() > 0.5 * r {
+            if (p[0] - c0).abs() > 0.5 * r {
                 return None;
             }
         }
-        out
+        let (chol, sse) = last?;
+        let s2 = sse / (n - k as f64).max(1.0);
+        let var_c = chol.inverse()[(0, 0)] * s2;
+        // The baseline's value and slope at t = 0 (for the template of the next round).
+        let (b0, b1) = (p[2], if deg >= 1 { p[3] * scale } else { 0.0 });
+        Some(ProfileCentre {
+            c: p[0],
+            sigma: var_c.max(0.0).sqrt().max(1e-3),
+            amp: p[1] * self.peak_mean(),
+            noise: s2.sqrt(),
+            n_core: 2.2 * r * n_a as f64,
+            b0,
+            b1,
+        })
     }
 
     /// Mean of the shape over the core `|x| ≤ 1.1 R` relative to its normalisation, so that
