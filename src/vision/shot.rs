@@ -699,20 +699,6 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         .collect();
     if std::env::var_os("STREAKFIT_DEBUG").is_some() {
         eprintln!("likeness {likeness:?} colours {colours:?} disc {disc_u:?}");
-        for (i, k) in kept.iter().enumerate() {
-            let (a, b) = (k[0], k[k.len() - 1]);
-            eprintln!(
-                "kept {i}: n {} from ({:.0},{:.0}) to ({:.0},{:.0}): {:?}",
-                k.len(),
-                a.x,
-                a.y,
-                b.x,
-                b.y,
-                k.iter()
-                    .map(|q| (q.x as i32, q.y as i32))
-                    .collect::<Vec<_>>()
-            );
-        }
     }
     let reading = match read_scene(&kept, &likeness, o, r, cue_stopped) {
         Ok(rd) => rd,
@@ -887,42 +873,6 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
             pb.sigma_r,
             fit.params
         );
-    }
-    // Consistency of the reading: the model must pass through its own samples. A wrong
-    // identity, a streak lost in noise or a crossing ball leaves residuals of many pixels that no
-    // texture or noise produces (good fits: RMS ≲ 0.03 R over every group).
-    let rms_px = {
-        let pi = fit.impact();
-        let u = {
-            let a = fit.alpha() + fit.psi_s();
-            (a.cos(), a.sin())
-        };
-        let rms =
-            |v: Vec<f64>| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
-        let inl = |g: usize, v: &[Sample]| -> Vec<(f64, f64)> {
-            v.iter()
-                .zip(&fit.inliers[g])
-                .filter(|(_, k)| **k)
-                .map(|(q, _)| (q.x, q.y))
-                .collect()
-        };
-        let inc = rms(inl(0, &pb.incoming)
-            .iter()
-            .map(|q| u.0 * (q.1 - pi.1) - u.1 * (q.0 - pi.0))
-            .collect());
-        let cue = match (fit.geom1(), &pb.out1) {
-            (Some(g), Some(v)) => rms(inl(1, v).iter().map(|q| g.signed_distance(*q)).collect()),
-            _ => 0.0,
-        };
-        let g2 = fit.geom2();
-        let obj = rms(inl(2, &pb.out2)
-            .iter()
-            .map(|q| g2.signed_distance(*q))
-            .collect());
-        [inc, cue, obj]
-    };
-    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-        eprintln!("rms_px {rms_px:.3?} R {r:.1}");
     }
     let psi_s = wrap(fit.psi_s());
     let m = if psi_s < 0.0 { -1.0 } else { 1.0 };
