@@ -338,7 +338,7 @@ fn path_starts(
             if l1 <= 0.05 * r {
                 continue;
             }
-            let c = (far.p.0 + s_c * u1.0 - 0.0, far.p.1 + s_c * u1.1);
+            let c = (far.p.0 + s_c * u1.0, far.p.1 + s_c * u1.1);
             let d0 = wrap((c.1 - start.1).atan2(c.0 - start.0) - alpha);
             cands.push((d0, theta, l0, l1));
         }

@@ -272,6 +272,12 @@ pub struct ProfileCentre {
     pub b1: f64,
 }
 
+/// Number of sub-samples along the streak averaged into one profile point (one per pixel of the
+/// step length).
+fn sub_steps(step: f64) -> usize {
+    (step.round() as usize).max(1)
+}
+
 /// One cross-profile: offsets `t` (px along the normal `n = (-d.y, d.x)` from the profile's
 /// centre point), the signal averaged over one step along the streak, and which offsets fall in
 /// another ball's light.
@@ -295,7 +301,7 @@ pub fn sample_profile(
 ) -> Option<Profile> {
     let n = (-d.1, d.0);
     let half = (1.7 * r).ceil() as i64;
-    let n_a = (step.round() as usize).max(1);
+    let n_a = sub_steps(step);
     let mut t = Vec::with_capacity(2 * half as usize + 1);
     let mut v = Vec::with_capacity(2 * half as usize + 1);
     for k in -half..=half {
@@ -348,7 +354,7 @@ pub fn profile_centre(
     u: [f32; 3],
 ) -> Option<ProfileCentre> {
     let pr = sample_profile(sig, p, d, r, step, excl, u)?;
-    let n_a = (step.round() as usize).max(1);
+    let n_a = sub_steps(step);
     centroid(&pr, r, n_a)
 }
 
@@ -858,7 +864,7 @@ pub fn remeasure(
     u: [f32; 3],
 ) -> Vec<Sample> {
     let step = (r * step_r).max(2.0);
-    let n_a = (step.round() as usize).max(1);
+    let n_a = sub_steps(step);
     let n = samples.len();
     let dir_at = |i: usize| {
         let k = ((2.0 * r / step) as usize).max(1);
@@ -896,18 +902,8 @@ pub fn remeasure(
     for (i, smp) in samples.iter().enumerate() {
         let d = dir_at(i);
         let p = (smp.x, smp.y);
-        let pr = sample_profile(sig, p, d, r, step, Some(excl), u);
-        let pc = pr.as_ref().and_then(|pr| centroid(pr, r, n_a));
-        if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-            eprintln!(
-                "remeasure ({:.0},{:.0}): profile {} centroid {:?}",
-                p.0,
-                p.1,
-                pr.is_some(),
-                pc.map(|c| (c.c, snr_of(&c)))
-            );
-        }
-        if let (Some(pr), Some(pc)) = (pr, pc)
+        if let Some(pr) = sample_profile(sig, p, d, r, step, Some(excl), u)
+            && let Some(pc) = centroid(&pr, r, n_a)
             && snr_of(&pc) >= 5.0
             && pc.c.abs() < 0.3 * r
         {
