@@ -6,7 +6,9 @@
 //! ([`crate::physics::closed::angles`]) at the shot's *true* `psi_i`, a latent parameter
 //! (errors-in-variables). Missing uncertainties default to [`FitOptions::default_sigma_deg`].
 //! Spin `r = R omega/v`, English `s = R omega_z/v`: known (table, or rolling `r = 1, s = 0` as in
-//! the paper's track experiments) or estimated per shot ([`SpinMode`]). Estimated spin: a shot
+//! the paper's track experiments) or estimated per shot ([`SpinMode`]). Estimated spin: each
+//! shot starts the joint fit from the best point of a coarse `(r, s)` grid at the start globals
+//! (not from rolling) and is re-seeded from the grid once the globals have moved; a shot
 //! whose assigned ball–ball state is physically impossible at its fitted spin (gross slip where
 //! even `mu0 = mu` would stick) is moved to the other state and the fit repeated; each shot's
 //! `r, s` errors come from its profile likelihood, widened to cover the other contact state when
@@ -524,6 +526,7 @@ fn grid_starts(
 
 /// Fits a single-regime model from several starts and keeps the lowest cost.
 fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit {
+    use rayon::prelude::*;
     let model = Model::Single(regime);
     let regimes = vec![regime; shots.len()];
     let p = problem(shots, regimes.clone(), model, opts);
@@ -534,8 +537,10 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
         let step = shots.len().div_ceil(100);
         let sub: Vec<ShotData> = shots.iter().step_by(step).cloned().collect();
         let ps = problem(&sub, vec![regime; sub.len()], model, opts);
+        // The starts are independent (and the subsample too small for the solver's own
+        // parallel loops): solved in parallel.
         let mut scored: Vec<(f64, [f64; NG])> = starts
-            .iter()
+            .par_iter()
             .map(|g| {
                 let st = State {
                     g: *g,
@@ -550,11 +555,18 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
     } else {
         starts
     };
+    let estimate = shots.iter().any(|s| s.estimate_spin);
     for g in starts {
-        let st = State {
+        let mut st = State {
             g,
             l: shots.iter().map(ShotData::start_locals).collect(),
         };
+        // Estimated spin: each shot starts from its best grid spin at the start globals, not
+        // from rolling (a draw shot started as rolling holds the globals back for tens of
+        // iterations and can stay in a worse minimum).
+        if estimate {
+            st = reseed_spin(&p, &st).0;
+        }
         let sol = p.solve(st, MAX_ITER);
         if best.as_ref().is_none_or(|b| sol.cost < b.cost) {
             best = Some(sol);
@@ -563,9 +575,12 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
     let mut best = best.expect("grid gives at least one start");
     // Estimated spin: the per-shot likelihood in (r, s) can have several minima (a draw shot
     // started as rolling); re-seed each shot from a grid at the current globals and refit.
-    if shots.iter().any(|s| s.estimate_spin) {
+    if estimate {
         for _ in 0..2 {
-            let st = reseed_spin(&p, &best.state);
+            let (st, moved) = reseed_spin(&p, &best.state);
+            if moved == 0 {
+                break;
+            }
             let sol = p.solve(st, MAX_ITER);
             if sol.cost < best.cost - 1e-9 {
                 best = sol;
@@ -583,28 +598,30 @@ fn fit_single(shots: &[ShotData], regime: Regime, opts: &FitOptions) -> ModelFit
 }
 
 /// Each estimated-spin shot moved to its best `(r, s)` grid point if that beats its current
-/// locals (globals and psi held).
-fn reseed_spin(p: &Problem, st: &State) -> State {
+/// locals (globals and psi held). Returns the state and the number of shots moved.
+fn reseed_spin(p: &Problem, st: &State) -> (State, usize) {
     use rayon::prelude::*;
-    let l: Vec<[f64; NL]> = (0..p.shots.len())
+    let picked: Vec<([f64; NL], bool)> = (0..p.shots.len())
         .into_par_iter()
         .map(|i| {
             let cur = st.l[i];
             if !p.shots[i].estimate_spin {
-                return cur;
+                return (cur, false);
             }
-            let mut best = (p.shot_cost(i, &st.g, &cur).0, cur);
+            let mut best = (p.shot_cost(i, &st.g, &cur).0, cur, false);
             for (r, s) in spin::spin_grid() {
                 let l = [cur[0], r, s];
                 let c = p.shot_cost(i, &st.g, &l).0;
                 if c < best.0 {
-                    best = (c, l);
+                    best = (c, l, true);
                 }
             }
-            best.1
+            (best.1, best.2)
         })
         .collect();
-    State { g: st.g, l }
+    let moved = picked.iter().filter(|x| x.1).count();
+    let l = picked.into_iter().map(|x| x.0).collect();
+    (State { g: st.g, l }, moved)
 }
 
 /// Two-regime model: profile chi² over the stick/slip partition ordered by each shot's critical

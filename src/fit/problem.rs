@@ -88,7 +88,9 @@ pub fn coefficients(g: &[f64; NG]) -> Coefficients {
 /// Wraps an angle difference into `(-pi, pi]`.
 pub fn wrap(a: f64) -> f64 {
     let two_pi = std::f64::consts::TAU;
-    let mut x = a % two_pi;
+    // A difference of two principal angles is within (-2 pi, 2 pi), where the remainder is the
+    // identity: skipping it gives the same value (the remainder took ~6 % of a fit's time).
+    let mut x = if a.abs() < two_pi { a } else { a % two_pi };
     if x > std::f64::consts::PI {
         x -= two_pi;
     } else if x <= -std::f64::consts::PI {

@@ -7,7 +7,11 @@
 //! are solved by eliminating the locals shot by shot (as in bundle adjustment):
 //! `S dg = -Aᵀr + Σ W_i V_i⁻¹ B_iᵀr_i` with `S = U - Σ W_i V_i⁻¹ W_iᵀ` (4×4), then
 //! `dl_i = V_i⁻¹(-B_iᵀr_i - W_iᵀ dg)`. Every step is linear in the number of shots.
-//! Derivatives are central differences of the closed forms. Bounds are kept by projection.
+//! Derivatives are finite differences of the closed forms: forward differences during the
+//! iterations (the residuals at the current point are kept from its cost evaluation, so a
+//! shot's linearisation costs one evaluation per free parameter; the end point is set by the
+//! residuals, the Jacobian only steers), central differences for the covariance at the end.
+//! Bounds are kept by projection.
 //! At the optimum (λ = 0) the covariance of the globals is `S⁻¹` (the globals block of
 //! `(JᵀJ)⁻¹`) and that of shot `i`'s locals is
 //! `V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹`, both for unit-variance residuals.
@@ -21,6 +25,10 @@ use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
 use rayon::prelude::*;
 
 type Matrix4x3 = SMatrix<f64, 4, 3>;
+
+/// Forward-difference step of the Jacobian during the iterations (about `sqrt(eps)` times
+/// the parameters' unit scale).
+pub const FORWARD_STEP: f64 = 1e-7;
 
 /// Shots from which the per-shot work runs on the rayon pool.
 const PAR_MIN: usize = 128;
@@ -84,9 +92,8 @@ struct Block {
 }
 
 impl Problem<'_> {
-    /// `(robust cost, chi²)` of shot `i` alone.
-    pub fn shot_cost(&self, i: usize, g: &[f64; NG], l: &[f64; NL]) -> (f64, f64) {
-        let r = residuals(self.shots[i], g, l, self.regimes[i]);
+    /// `(robust cost, chi²)` of one shot's residual block.
+    pub fn block_cost(&self, r: &[f64; NRES]) -> (f64, f64) {
         let mut cost = 0.0;
         let mut chi2 = 0.0;
         for (k, x) in r.iter().enumerate() {
@@ -100,43 +107,87 @@ impl Problem<'_> {
         (cost, chi2)
     }
 
+    /// `(robust cost, chi²)` of shot `i` alone.
+    pub fn shot_cost(&self, i: usize, g: &[f64; NG], l: &[f64; NL]) -> (f64, f64) {
+        self.block_cost(&residuals(self.shots[i], g, l, self.regimes[i]))
+    }
+
     /// `(robust cost, chi²)` of a state.
     pub fn cost(&self, st: &State) -> (f64, f64) {
-        let one = |i: usize| self.shot_cost(i, &st.g, &st.l[i]);
-        let add = |a: (f64, f64), b: (f64, f64)| (a.0 + b.0, a.1 + b.1);
-        if self.shots.len() >= PAR_MIN {
-            (0..self.shots.len())
-                .into_par_iter()
-                .map(one)
-                .reduce(|| (0.0, 0.0), add)
+        self.cost_res(st).0
+    }
+
+    /// `(robust cost, chi²)` of a state and every shot's residuals (kept so that the next
+    /// linearisation at this state does not evaluate them again).
+    fn cost_res(&self, st: &State) -> ((f64, f64), Vec<[f64; NRES]>) {
+        let one = |i: usize| residuals(self.shots[i], &st.g, &st.l[i], self.regimes[i]);
+        let res: Vec<[f64; NRES]> = if self.shots.len() >= PAR_MIN {
+            (0..self.shots.len()).into_par_iter().map(one).collect()
         } else {
-            (0..self.shots.len()).map(one).fold((0.0, 0.0), add)
-        }
+            (0..self.shots.len()).map(one).collect()
+        };
+        (self.total(&res), res)
+    }
+
+    /// `(robust cost, chi²)` summed over residual blocks in shot order (the same sum whatever
+    /// the thread count).
+    fn total(&self, res: &[[f64; NRES]]) -> (f64, f64) {
+        res.iter().fold((0.0, 0.0), |a, r| {
+            let c = self.block_cost(r);
+            (a.0 + c.0, a.1 + c.1)
+        })
     }
 
     /// Linearises shot `i`: weighted residuals, `A_i` (NRES×4) and `B_i` (NRES×3).
+    /// `r0`: the residuals at `(g, l)` when already known. `central`: central differences
+    /// (step `1e-6`, error `O(h²)`, for the covariance) or forward differences (half the
+    /// evaluations; error `O(h)` ≈ 1e-7 relative, for the iterations, whose end point is set by
+    /// the residuals, not by the Jacobian).
     fn linearise(
         &self,
         i: usize,
         g: &[f64; NG],
         l: &[f64; NL],
+        r0: Option<&[f64; NRES]>,
+        central: bool,
     ) -> ([f64; NRES], [[f64; NG]; NRES], [[f64; NL]; NRES]) {
         let s = self.shots[i];
         let reg = self.regimes[i];
-        let r0 = residuals(s, g, l, reg);
+        let r0 = match r0 {
+            Some(r) => *r,
+            None => residuals(s, g, l, reg),
+        };
         let mut a = [[0.0; NG]; NRES];
         let mut b = [[0.0; NL]; NRES];
+        // Column of the Jacobian from residuals at `x ± h` (central) or at `x + h` and `r0`.
+        let column = |at: &dyn Fn(f64) -> [f64; NRES]| -> [f64; NRES] {
+            let mut d = [0.0; NRES];
+            if central {
+                let h = 1e-6;
+                let (rp, rm) = (at(h), at(-h));
+                for k in 0..NRES {
+                    d[k] = (rp[k] - rm[k]) / (2.0 * h);
+                }
+            } else {
+                let h = FORWARD_STEP;
+                let rp = at(h);
+                for k in 0..NRES {
+                    d[k] = (rp[k] - r0[k]) / h;
+                }
+            }
+            d
+        };
         for j in 0..NG {
             if !self.free_global[j] {
                 continue;
             }
-            let h = 1e-6;
-            let (mut gp, mut gm) = (*g, *g);
-            gp[j] += h;
-            gm[j] -= h;
-            let (rp, rm) = (residuals(s, &gp, l, reg), residuals(s, &gm, l, reg));
+            let d = column(&|h| {
+                let mut gh = *g;
+                gh[j] += h;
+                residuals(s, &gh, l, reg)
+            });
             for k in 0..NRES {
-                a[k][j] = (rp[k] - rm[k]) / (2.0 * h);
+                a[k][j] = d[k];
             }
         }
         let free_l = s.free_locals();
@@ -144,13 +195,13 @@ impl Problem<'_> {
             if !free_l[j] {
                 continue;
             }
-            let h = 1e-6;
-            let (mut lp, mut lm) = (*l, *l);
-            lp[j] += h;
-            lm[j] -= h;
-            let (rp, rm) = (residuals(s, g, &lp, reg), residuals(s, g, &lm, reg));
+            let d = column(&|h| {
+                let mut lh = *l;
+                lh[j] += h;
+                residuals(s, g, &lh, reg)
+            });
             for k in 0..NRES {
-                b[k][j] = (rp[k] - rm[k]) / (2.0 * h);
+                b[k][j] = d[k];
             }
         }
         // IRLS weights of the robust loss on the angle residuals.
@@ -168,10 +219,19 @@ impl Problem<'_> {
         (r, a, b)
     }
 
-    /// Normal-equation pieces at a state: `(U, eg, blocks)`.
-    fn normal(&self, st: &State, active_set: bool) -> (Matrix4<f64>, Vector4<f64>, Vec<Block>) {
+    /// Normal-equation pieces at a state: `(U, eg, blocks)`; `res`: the state's residuals
+    /// from [`Problem::cost_res`].
+    /// `iterate`: a step of the iterations (active set, forward differences) rather than the
+    /// covariance at the end (no active set, central differences).
+    fn normal(
+        &self,
+        st: &State,
+        res: &[[f64; NRES]],
+        iterate: bool,
+    ) -> (Matrix4<f64>, Vector4<f64>, Vec<Block>) {
+        let active_set = iterate;
         let per_shot = |i: usize| {
-            let (r, a, b) = self.linearise(i, &st.g, &st.l[i]);
+            let (r, a, b) = self.linearise(i, &st.g, &st.l[i], Some(&res[i]), !iterate);
             let mut u = Matrix4::zeros();
             let mut eg = Vector4::zeros();
             let mut v = Matrix3::zeros();
@@ -309,13 +369,13 @@ impl Problem<'_> {
     /// Levenberg–Marquardt from `start`, at most `max_iter` Jacobian evaluations.
     pub fn solve(&self, start: State, max_iter: usize) -> Solution {
         let mut st = start;
-        let (mut cost, _) = self.cost(&st);
+        let ((mut cost, _), mut res) = self.cost_res(&st);
         let mut lambda = 1e-3;
         let mut converged = false;
         let mut iterations = 0;
         while iterations < max_iter {
             iterations += 1;
-            let (u, eg, blocks) = self.normal(&st, true);
+            let (u, eg, blocks) = self.normal(&st, &res, true);
             let mut improved = false;
             for _ in 0..12 {
                 let Some((dg, dl)) = self.step(&u, &eg, &blocks, lambda) else {
@@ -323,7 +383,7 @@ impl Problem<'_> {
                     continue;
                 };
                 let cand = self.apply(&st, &dg, &dl);
-                let (c, _) = self.cost(&cand);
+                let ((c, _), cand_res) = self.cost_res(&cand);
                 if c.is_finite() && c <= cost {
                     let drop = cost - c;
                     let rel = drop / cost.max(1e-300);
@@ -331,6 +391,7 @@ impl Problem<'_> {
                         .amax()
                         .max(dl.iter().map(|d| d.amax()).fold(0.0, f64::max));
                     st = cand;
+                    res = cand_res;
                     cost = c;
                     lambda = (lambda / 4.0).max(1e-12);
                     improved = true;
@@ -351,13 +412,19 @@ impl Problem<'_> {
                 break;
             }
         }
-        self.finish(st, iterations, converged)
+        self.finish(st, res, iterations, converged)
     }
 
     /// Covariances at a state (λ = 0), see the module doc.
-    fn finish(&self, st: State, iterations: usize, converged: bool) -> Solution {
-        let (cost, chi2) = self.cost(&st);
-        let (u, _, blocks) = self.normal(&st, false);
+    fn finish(
+        &self,
+        st: State,
+        res: Vec<[f64; NRES]>,
+        iterations: usize,
+        converged: bool,
+    ) -> Solution {
+        let (cost, chi2) = self.total(&res);
+        let (u, _, blocks) = self.normal(&st, &res, false);
         let mut s = u;
         let mut vinvs = Vec::with_capacity(blocks.len());
         for b in &blocks {
@@ -480,7 +547,8 @@ mod tests {
             g,
             l: shots.iter().map(|s| s.start_locals()).collect(),
         };
-        let sol = p.finish(st.clone(), 0, true);
+        let res = p.cost_res(&st).1;
+        let sol = p.finish(st.clone(), res, 0, true);
         // Dense Jacobian: columns e, mu, mu_table, then each shot's free locals.
         let mut cols: Vec<(usize, Option<usize>)> = (0..3).map(|j| (j, None)).collect();
         for (i, s) in shots.iter().enumerate() {
@@ -494,7 +562,7 @@ mod tests {
         let mut jac = nalgebra::DMatrix::zeros(m, cols.len());
         for (c, (j, who)) in cols.iter().enumerate() {
             for (i, s) in shots.iter().enumerate() {
-                let (_, a, b) = p.linearise(i, &st.g, &st.l[i]);
+                let (_, a, b) = p.linearise(i, &st.g, &st.l[i], None, true);
                 for k in 0..NRES {
                     jac[(i * NRES + k, c)] = match who {
                         None => a[k][*j],

@@ -28,7 +28,7 @@ use super::problem::{
     ENGLISH_PRIOR_SIGMA, LOCAL_HI, LOCAL_LO, NG, NL, NRES, SPIN_PRIOR_SIGMA, ShotData,
     critical_mu_static, residuals,
 };
-use super::solver::{Problem, State};
+use super::solver::{FORWARD_STEP, Problem, State};
 use crate::physics::Regime;
 
 /// Reseeding grid of spin `r` (`[-2, 3]`, step 0.25) and English `s` (`[-1, 1]`, step 0.2).
@@ -87,26 +87,24 @@ fn minimise_nuisance(
     let free = s.free_locals();
     let idx: Vec<usize> = (0..NL).filter(|&j| free[j] && j != k).collect();
     let mut l = l0;
-    let mut cost = p.shot_cost(0, g, &l).0;
+    // Residuals at the current point, kept from its cost evaluation.
+    let mut r0 = residuals(s, g, &l, p.regimes[0]);
+    let mut cost = p.block_cost(&r0).0;
     if idx.is_empty() {
         return (l, cost);
     }
     let mut lambda = 1e-3;
     for _ in 0..iters {
-        let r0 = residuals(s, g, &l, p.regimes[0]);
         let n = idx.len();
         let mut jac = [[0.0; 2]; NRES];
+        // Forward differences: the end point is set by the cost, not by the Jacobian.
         for (c, &j) in idx.iter().enumerate() {
-            let h = 1e-6;
-            let (mut lp, mut lm) = (l, l);
+            let h = FORWARD_STEP;
+            let mut lp = l;
             lp[j] += h;
-            lm[j] -= h;
-            let (rp, rm) = (
-                residuals(s, g, &lp, p.regimes[0]),
-                residuals(s, g, &lm, p.regimes[0]),
-            );
+            let rp = residuals(s, g, &lp, p.regimes[0]);
             for q in 0..NRES {
-                jac[q][c] = (rp[q] - rm[q]) / (2.0 * h);
+                jac[q][c] = (rp[q] - r0[q]) / h;
             }
         }
         let mut a = [[0.0; 2]; 2];
@@ -142,10 +140,12 @@ fn minimise_nuisance(
             for (c, &j) in idx.iter().enumerate() {
                 cand[j] = (cand[j] + step[c]).clamp(LOCAL_LO[j], LOCAL_HI[j]);
             }
-            let c = p.shot_cost(0, g, &cand).0;
+            let rc = residuals(s, g, &cand, p.regimes[0]);
+            let c = p.block_cost(&rc).0;
             if c.is_finite() && c <= cost {
                 let drop = cost - c;
                 l = cand;
+                r0 = rc;
                 cost = c;
                 lambda = (lambda / 4.0).max(1e-12);
                 improved = drop > 1e-8;
