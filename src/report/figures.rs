@@ -9,6 +9,9 @@
 //! - Figs. 12/13: `delta2` against `psi` in the auto regime (stick/slip decided with the static
 //!   friction `mu0`), which jumps at `psi_L` when `mu0 != mu`, beside the gross-slip curve;
 //! - residuals `measured - predicted(fitted)` of all four angles against `psi`;
+//! - shots of unknown spin (fits with `--spin estimate|auto`): each shot's estimated spin `r`
+//!   and English `s` with their 1-sigma errors against its fitted `psi`, coloured by its
+//!   estimated contact regime, and the four residuals of the same shots;
 //! - the regime map over (`psi`, `r = R omega/v`) for the fitted coefficients;
 //! - predicted paths for a fan of spins at `psi = 45°`.
 //!
@@ -581,6 +584,22 @@ pub struct ResidualPoint {
     pub psi_deg: f64,
     pub resid_deg: [Option<f64>; 4],
     pub err_deg: [Option<f64>; 4],
+    /// The fit's estimate of the shot's spin; `None` when the spin was known or assumed.
+    pub spin: Option<SpinEstimate>,
+}
+
+/// A shot's spin as the fit estimated it (`spin_est, spin_err, english_est, english_err,
+/// regime_est` of the per-shot table); a component the shot does not determine is `None`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpinEstimate {
+    /// `r = R omega/v` and its 1-sigma error.
+    pub spin: Option<f64>,
+    pub spin_err: Option<f64>,
+    /// `s = R omega_z/v` and its 1-sigma error.
+    pub english: Option<f64>,
+    pub english_err: Option<f64>,
+    /// Contact regime of the shot at its estimate.
+    pub regime: Option<Regime>,
 }
 
 /// Residuals computed from the fitted coefficients at each shot's measured `psi`, spin and
@@ -608,6 +627,7 @@ fn model_residuals(m: &MaterialFigures, model: &Model) -> Vec<ResidualPoint> {
             }
             Some(ResidualPoint {
                 psi_deg: psi,
+                spin: None,
                 resid_deg: resid,
                 err_deg: [
                     r.delta1_err_deg,
@@ -635,45 +655,13 @@ pub fn residuals(m: &MaterialFigures) -> Option<Figure> {
             "as the fit computed them (at the fitted ψ of each shot)",
         )
     };
-    let mut panels = Vec::new();
-    for (idx, sym) in [
-        (DELTA1, "δ₁"),
-        (DELTA2, "δ₂"),
-        (THETA1, "θ₁"),
-        (THETA2, "θ₂"),
-    ] {
-        let mut p = Panel::new(
-            format!("{}: residual of {sym}", m.label),
-            "impact angle ψ (deg)",
-            format!("{sym} measured − fit (deg)"),
-        );
-        p.x_range = (0.0, 90.0);
-        p.legend = LegendAt::Auto;
-        p.lines.push(Line::guide(
-            vec![(0.0, 0.0), (90.0, 0.0)],
-            GREY,
-            Dash::Solid,
-        ));
-        let pts: Vec<DataPoint> = points
-            .iter()
-            .filter_map(|q| {
-                Some(DataPoint {
-                    x: q.psi_deg,
-                    y: q.resid_deg[idx]?,
-                    x_err: None,
-                    y_err: plot::sym(q.err_deg[idx]),
-                })
-            })
-            .collect();
-        let rms = (pts.iter().map(|d| d.y * d.y).sum::<f64>() / pts.len().max(1) as f64).sqrt();
-        p.points.push(Points {
-            label: Some(format!("{} shots, rms {rms:.2}°", pts.len())),
-            points: pts,
-            color: material_color(&m.name),
-            marker: Marker::Circle,
-        });
-        panels.push(p.auto_y(2.0));
-    }
+    let all = ResidualSeries {
+        label: String::new(),
+        color: material_color(&m.name),
+        marker: Marker::Circle,
+        points: points.iter().collect(),
+    };
+    let panels = residual_panels(&m.label, &[all]);
     Some(
         Figure::new(
             format!("{}_residuals", m.name),
@@ -686,6 +674,211 @@ pub fn residuals(m: &MaterialFigures) -> Option<Figure> {
             panels,
         )
         .with_size(1400, 1000),
+    )
+}
+
+/// One coloured series of residual points (`label` empty: the legend gives counts only).
+struct ResidualSeries<'a> {
+    label: String,
+    color: RGBColor,
+    marker: Marker,
+    points: Vec<&'a ResidualPoint>,
+}
+
+/// The four residual panels (`delta1, delta2, theta1, theta2` against `psi`), each series with
+/// its shot count and rms in the legend; series without points in a panel are left out.
+fn residual_panels(title: &str, series: &[ResidualSeries]) -> Vec<Panel> {
+    let mut panels = Vec::new();
+    for (idx, sym) in [
+        (DELTA1, "δ₁"),
+        (DELTA2, "δ₂"),
+        (THETA1, "θ₁"),
+        (THETA2, "θ₂"),
+    ] {
+        let mut p = Panel::new(
+            format!("{title}: residual of {sym}"),
+            "impact angle ψ (deg)",
+            format!("{sym} measured − fit (deg)"),
+        );
+        p.x_range = (0.0, 90.0);
+        p.legend = LegendAt::Auto;
+        p.lines.push(Line::guide(
+            vec![(0.0, 0.0), (90.0, 0.0)],
+            GREY,
+            Dash::Solid,
+        ));
+        for s in series {
+            let pts: Vec<DataPoint> = s
+                .points
+                .iter()
+                .filter_map(|q| {
+                    Some(DataPoint {
+                        x: q.psi_deg,
+                        y: q.resid_deg[idx]?,
+                        x_err: None,
+                        y_err: plot::sym(q.err_deg[idx]),
+                    })
+                })
+                .collect();
+            if pts.is_empty() && series.len() > 1 {
+                continue;
+            }
+            let rms = (pts.iter().map(|d| d.y * d.y).sum::<f64>() / pts.len().max(1) as f64).sqrt();
+            let counts = format!("{}, rms {rms:.2}°", shots(pts.len()));
+            p.points.push(Points {
+                label: Some(if s.label.is_empty() {
+                    counts
+                } else {
+                    format!("{}: {counts}", s.label)
+                }),
+                points: pts,
+                color: s.color,
+                marker: s.marker,
+            });
+        }
+        if p.points.iter().all(|s| s.points.is_empty()) {
+            p.notes.push(Note {
+                x: 5.0,
+                y: 0.5,
+                text: format!("no {sym} residuals for these shots"),
+                color: GREY,
+            });
+        }
+        panels.push(p.auto_y(2.0));
+    }
+    panels
+}
+
+/// `n shots` with the singular for one.
+fn shots(n: usize) -> String {
+    if n == 1 {
+        "1 shot".to_string()
+    } else {
+        format!("{n} shots")
+    }
+}
+
+/// Marker of a regime in the spin figure (shape as well as colour tells the regimes apart).
+fn regime_marker(r: Option<Regime>) -> Marker {
+    match r {
+        Some(Regime::MuMu) => Marker::Circle,
+        Some(Regime::SlipMu) => Marker::Square,
+        Some(Regime::MuSlip) => Marker::Triangle,
+        Some(Regime::SlipSlip) | None => Marker::Cross,
+    }
+}
+
+/// Shots of unknown spin (issue 8): (a) estimated spin `r` and (b) English `s` with their
+/// 1-sigma errors against the fitted `psi`, one series per estimated regime, and (c–f) the four
+/// residuals of the same shots in the same colours. `None` when no shot has an estimated spin
+/// (all known or assumed) or there is no fit.
+pub fn spin_estimates(m: &MaterialFigures) -> Option<Figure> {
+    let model = m.fitted.as_ref()?;
+    let est: Vec<&ResidualPoint> = m
+        .fit_residuals
+        .iter()
+        .filter(|q| q.spin.is_some())
+        .collect();
+    if est.is_empty() {
+        return None;
+    }
+    let spin_of = |q: &ResidualPoint| q.spin.clone().expect("filtered on spin");
+    let mut series = Vec::new();
+    for reg in Regime::ALL.map(Some).into_iter().chain([None]) {
+        let points: Vec<&ResidualPoint> = est
+            .iter()
+            .copied()
+            .filter(|q| spin_of(q).regime == reg)
+            .collect();
+        if points.is_empty() {
+            continue;
+        }
+        series.push(ResidualSeries {
+            label: reg
+                .map_or("regime not given", theory::pretty_regime)
+                .to_string(),
+            color: reg.map_or(GREY, regime_color),
+            marker: regime_marker(reg),
+            points,
+        });
+    }
+    // Panel of one spin component: points where the fit determined it (finite error bar).
+    let component = |title: String,
+                     y_label: &str,
+                     get: fn(&SpinEstimate) -> (Option<f64>, Option<f64>),
+                     guides: &[(f64, Dash)],
+                     min_span: f64| {
+        let mut p = Panel::new(title, "impact angle ψ (deg), fitted", y_label);
+        p.x_range = (0.0, 90.0);
+        p.legend = LegendAt::Auto;
+        for (y, dash) in guides {
+            p.lines
+                .push(Line::guide(vec![(0.0, *y), (90.0, *y)], GREY, *dash));
+        }
+        let mut n_shown = 0;
+        for s in &series {
+            let points: Vec<DataPoint> = s
+                .points
+                .iter()
+                .filter_map(|q| {
+                    let (v, e) = get(&spin_of(q));
+                    let v = v.filter(|v| v.is_finite())?;
+                    Some(dp(q.psi_deg, None, v, e.filter(|e| e.is_finite())))
+                })
+                .collect();
+            if points.is_empty() {
+                continue;
+            }
+            n_shown += points.len();
+            p.points.push(Points {
+                label: Some(format!("{}: {}", s.label, shots(points.len()))),
+                points,
+                color: s.color,
+                marker: s.marker,
+            });
+        }
+        (p.auto_y(min_span), n_shown)
+    };
+    let n = est.len();
+    let (pr, n_r) = component(
+        format!("{}: estimated spin r", m.label),
+        "spin r = Rω/v (1 rolling, 0 stun, <0 draw)",
+        |s| (s.spin, s.spin_err),
+        &[(1.0, Dash::Dashed), (0.0, Dash::Dotted)],
+        2.0,
+    );
+    let (ps, n_s) = component(
+        format!("{}: estimated English s", m.label),
+        "English s = Rω_z/v",
+        |s| (s.english, s.english_err),
+        &[(0.0, Dash::Dashed)],
+        1.0,
+    );
+    let mut panels = vec![pr, ps];
+    panels.extend(residual_panels(
+        &format!("{}, estimated-spin shots", m.label),
+        &series,
+    ));
+    Some(
+        Figure::new(
+            format!("{}_spin_estimates", m.name),
+            format!(
+                "Shots of unknown spin, {}: (a) the spin r = Rω/v and (b) the English s = Rω_z/v \
+                 estimated for each shot jointly with the coefficients ({}), against the shot's \
+                 fitted ψ, with 1σ error bars from the shot's profile likelihood (widened where \
+                 both ball–ball contact states fit); colour and marker give the shot's estimated \
+                 regime (regime_est); dashed r = 1 rolling, dotted r = 0 stun, dashed s = 0 no \
+                 English. (c–f) residuals measured − fit of the four angles of the same shots, \
+                 same colours, error bars the extraction's 1σ. {n} shots with estimated spin; \
+                 r is undetermined (not drawn) for {} of them and s for {}.",
+                m.label,
+                model.describe(),
+                n - n_r,
+                n - n_s
+            ),
+            panels,
+        )
+        .with_size(1400, 1500),
     )
 }
 
@@ -982,6 +1175,9 @@ fn clamp_y(mut p: Panel, lo: f64, hi: f64) -> Panel {
 pub fn material_figures(m: &MaterialFigures) -> Vec<Figure> {
     let mut out = vec![fig09(m), fig10(m), fig11(m), fig12(m)];
     if let Some(r) = residuals(m) {
+        out.push(r);
+    }
+    if let Some(r) = spin_estimates(m) {
         out.push(r);
     }
     let model = m.fitted.as_ref().or(m.paper.as_ref());

@@ -289,8 +289,20 @@ fn residual_point(r: &ResidualRow, rows: &[ShotRow]) -> Option<figures::Residual
     }
     let row = rows.iter().find(|x| x.file == r.file);
     let err = |f: fn(&ShotRow) -> Option<f64>| row.and_then(f);
+    // Estimated spin: `estimated`, or `undetermined` when a component is null (the shot is
+    // still an estimated-spin shot); `known` and `assumed` spins are not estimates.
+    let spin = matches!(r.spin_source.as_str(), "estimated" | "undetermined").then(|| {
+        figures::SpinEstimate {
+            spin: r.spin_est,
+            spin_err: r.spin_err,
+            english: r.english_est,
+            english_err: r.english_err,
+            regime: r.regime_est.as_deref().and_then(|x| x.parse().ok()),
+        }
+    });
     Some(figures::ResidualPoint {
         psi_deg: r.psi_fit_deg.or(r.psi_deg)?,
+        spin,
         resid_deg: [
             r.delta1_resid_deg,
             r.delta2_resid_deg,
@@ -451,6 +463,143 @@ pub use crate::io::write_atomic;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A report input from a real fit of a synthetic billiard table (30 shots, mu–mu).
+    fn fitted_input(
+        spin: crate::fit::synthetic::SyntheticSpin,
+        mode: crate::fit::SpinMode,
+    ) -> ReportInput {
+        use crate::fit::synthetic::{SyntheticSpec, paper_materials, synthetic_table};
+        let (name, c) = paper_materials()[0];
+        let (rows, _) = synthetic_table(&SyntheticSpec {
+            material: name.into(),
+            coefficients: c,
+            n: 30,
+            psi_lo_deg: 10.0,
+            psi_hi_deg: 70.0,
+            noise_deg: 0.3,
+            spin,
+            seed: 8,
+        });
+        let opts = crate::fit::FitOptions {
+            model: Some("mu-mu".parse().unwrap()),
+            spin: mode,
+            bootstrap: 0,
+            ..crate::fit::FitOptions::default()
+        };
+        let out = crate::fit::fit_materials(&rows, &opts).unwrap();
+        let materials = Materials::load(&Materials::default_path()).unwrap();
+        let fits = out
+            .fits
+            .iter()
+            .map(|f| FitSummary::from_fit(f, materials.0.get(&f.material)))
+            .collect();
+        ReportInput {
+            title: "spin".into(),
+            rows,
+            fits,
+            residuals: out.residuals,
+            materials,
+            folders: Vec::new(),
+            settings_text: String::new(),
+            settings_name: String::new(),
+            stages: Vec::new(),
+            gallery_per_folder: 0,
+            fit_settings: String::new(),
+            fit_failures: Vec::new(),
+        }
+    }
+
+    /// Issue 8: the spin figure appears for a fit with estimated spins (one point per shot
+    /// whose `r` the fit determined, with its error bar) and not when every spin is known.
+    #[test]
+    fn spin_figure_only_for_estimated_spins() {
+        use crate::fit::SpinMode;
+        use crate::fit::synthetic::SyntheticSpin;
+        let mixed = SyntheticSpin::Mixed {
+            r_lo: -1.0,
+            r_hi: 1.5,
+            s_max: 0.3,
+            write: false,
+        };
+        let input = fitted_input(mixed, SpinMode::Estimate);
+        let m = &material_inputs(&input)[0];
+        let figs = figures::material_figures(m);
+        let fig = figs
+            .iter()
+            .find(|f| f.name == "billiard_spin_estimates")
+            .expect("spin figure for estimated spins");
+        assert_eq!(fig.panels.len(), 6);
+        let determined: Vec<&ResidualRow> = input
+            .residuals
+            .iter()
+            .filter(|r| r.used && r.spin_est.is_some())
+            .collect();
+        assert!(determined.len() >= 20, "{} shots with r", determined.len());
+        let drawn: Vec<&plot::DataPoint> = fig.panels[0]
+            .points
+            .iter()
+            .flat_map(|s| &s.points)
+            .collect();
+        assert_eq!(drawn.len(), determined.len());
+        for r in &determined {
+            let (psi, spin, err) = (
+                r.psi_fit_deg.unwrap(),
+                r.spin_est.unwrap(),
+                r.spin_err.unwrap(),
+            );
+            assert!(
+                drawn.iter().any(|d| (d.x - psi).abs() < 1e-12
+                    && (d.y - spin).abs() < 1e-12
+                    && d.y_err
+                        .is_some_and(|e| (e.0 - err).abs() < 1e-12 && (e.1 - err).abs() < 1e-12)),
+                "{} not drawn with its error bar",
+                r.file
+            );
+        }
+        // Every series is a regime of the fit, in that regime's colour.
+        for s in &fig.panels[0].points {
+            let label = s.label.as_deref().unwrap();
+            let reg = crate::physics::Regime::ALL
+                .into_iter()
+                .find(|r| label.starts_with(theory::pretty_regime(*r)))
+                .unwrap_or_else(|| panic!("series {label} is not a regime"));
+            assert_eq!(s.color, figures::regime_color(reg));
+        }
+        // Residual panels hold the same shots (delta1 is measured for all).
+        let n_resid: usize = fig.panels[2].points.iter().map(|s| s.points.len()).sum();
+        let n_est = input
+            .residuals
+            .iter()
+            .filter(|r| r.used && matches!(r.spin_source.as_str(), "estimated" | "undetermined"))
+            .count();
+        assert_eq!(n_resid, n_est);
+
+        // Known spins (written to the table): no spin figure, the residual figure stays.
+        let input = fitted_input(
+            SyntheticSpin::Mixed {
+                r_lo: -1.0,
+                r_hi: 1.5,
+                s_max: 0.3,
+                write: true,
+            },
+            SpinMode::Known,
+        );
+        let used: Vec<&ResidualRow> = input.residuals.iter().filter(|r| r.used).collect();
+        assert!(used.len() >= 20 && used.iter().all(|r| r.spin_source == "known"));
+        let names: Vec<String> = figures::material_figures(&material_inputs(&input)[0])
+            .into_iter()
+            .map(|f| f.name)
+            .collect();
+        assert!(
+            names.contains(&"billiard_residuals".to_string()),
+            "{names:?}"
+        );
+        assert!(
+            !names.iter().any(|n| n.contains("spin_estimates")),
+            "{names:?}"
+        );
+    }
 
     #[test]
     fn reasons_group_without_numbers() {
