@@ -593,6 +593,10 @@ fn push_segments(
     cutter.cut(out, (ta, tb), (pa, pb), 0);
 }
 
+/// Largest sideways distance (px) between a rendered chord and the path at its middle; the
+/// sagitta of a chord of length `l` on a path of curvature `κ` is `l²κ/8`.
+const SIDE_TOLERANCE_PX: f64 = 0.01;
+
 /// The fixed inputs of [`push_segments`]'s recursive bisection.
 struct Cutter<'a> {
     cam: &'a Camera,
@@ -617,10 +621,22 @@ impl Cutter<'_> {
         let r_px = cam.scale_at(wm, radius) * radius;
         let len = (pb - pa).norm();
         let dev = (pm - 0.5 * (pa + pb)).norm();
+        // Sideways deviation of the path from the chord: the extractor measures centre-lines to
+        // a few hundredths of a pixel, and a chord drawn instead of a sliding arc turns the
+        // streak's start tangent towards the rolling line (half the turn of the first chord).
+        let side = if len > 0.0 {
+            let d = (pb - pa) / len;
+            (pm - 0.5 * (pa + pb)).perp(&d).abs()
+        } else {
+            dev
+        };
         // A piece far outside the image only needs its time accounted, not its shape. (If it
         // crossed the image, an endpoint would lie within `len` of it.)
         let far = !cam.contains(pa, 3.0 * r_px + len) && !cam.contains(pb, 3.0 * r_px + len);
-        if depth >= 30 || far || (len <= 3.0 * r_px && dev <= (0.02 * len).max(0.25)) {
+        if depth >= 30
+            || far
+            || (len <= 3.0 * r_px && dev <= (0.02 * len).max(0.25) && side <= SIDE_TOLERANCE_PX)
+        {
             if !far {
                 out.push(Segment {
                     a: [pa.x, pa.y],

@@ -20,6 +20,8 @@
 //! - [`pathfit`]: the joint physical model (incoming line, contact geometry, one path per outgoing
 //!   ball: line, or sliding parabola tangent to the rolling line), robust start, Levenberg–Marquardt,
 //!   model choice by BIC and covariance;
+//! - [`arc`]: the cue ball's start tangent `delta1` from the pixels around the impact, where its
+//!   short sliding arc overlaps the incoming streak (a dwell-time model of the light, fitted);
 //! - [`shot`]: scene reading (which streak is which ball) and the whole per-image analysis;
 //! - [`overlay`]: drawings that show why each number is what it is.
 //!
@@ -28,6 +30,7 @@
 //! so that the incoming direction has `v_y ≥ 0`, hence `psi ∈ [0°, 90°)`. `delta` is the start
 //! tangent of a ball's path, `theta` the direction of its straight rolling part.
 
+pub mod arc;
 pub mod background;
 pub mod disc;
 pub mod image_io;

@@ -12,6 +12,7 @@
 //! sits at `P` (then `delta1`, `theta1` are undefined), otherwise its streak is hidden and the
 //! photo is declined.
 
+use super::arc;
 use super::background::{self, Signal};
 use super::disc::{self, Disc};
 use super::image_io::RgbImage;
@@ -35,6 +36,9 @@ pub struct AnalysisOptions {
     pub path_models: PathModels,
     /// Settings of the joint path fit.
     pub fit: pathfit::FitSettings,
+    /// Measure the cue ball's start tangent `delta1` from the pixels around the impact
+    /// ([`arc`]); without it `delta1` comes from the centre-lines only and is mostly undefined.
+    pub arc_pixels: bool,
 }
 
 impl Default for AnalysisOptions {
@@ -45,6 +49,7 @@ impl Default for AnalysisOptions {
             sample_step_r: 0.1,
             path_models: PathModels::Auto,
             fit: pathfit::FitSettings::default(),
+            arc_pixels: true,
         }
     }
 }
@@ -84,6 +89,14 @@ impl AnalysisOptions {
                 false,
             ));
         }
+        out.push((
+            "arc_pixels=false".into(),
+            AnalysisOptions {
+                arc_pixels: false,
+                ..d.clone()
+            },
+            false,
+        ));
         out.push((
             "path_models=line".into(),
             AnalysisOptions {
@@ -896,6 +909,7 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     // where the streaks overlap near the impact): it is reported as undefined, with the reason.
     let unresolved = 10f64.to_radians();
     let mut notes: Vec<String> = Vec::new();
+    let mut delta1_from_arc = false;
     let mut angle = |idx: usize, name: &str| -> (Option<f64>, Option<f64>) {
         let sd = SIGMA_CALIBRATION * fit.sd(idx);
         if sd.is_finite() && sd <= unresolved {
@@ -910,6 +924,59 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     };
     if let Some((id, it)) = fit.angle_indices(1) {
         (out.delta1_deg, out.delta1_err_deg) = angle(id, "delta1");
+        // The sliding arc mostly lies where the cue ball's light overlaps the incoming streak:
+        // its start tangent comes from the pixels there (the centre-line fit gives the rest).
+        let alpha = fit.alpha();
+        let g1 = fit.geom1().expect("ball 1 has a path");
+        let geometry = arc::ArcGeometry {
+            p: fit.impact(),
+            r: fit.r(),
+            theta: alpha + fit.params[it],
+            line_point: g1.end,
+            incoming: ((alpha + fit.psi_s()).cos(), (alpha + fit.psi_s()).sin()),
+            o: fit.o(),
+            object_dir: fit.geom2().u0,
+            delta_guess: (id != it && fit.sd(id).is_finite()).then(|| alpha + fit.params[id]),
+        };
+        let cue_u = reading.b1.map_or(sig.u, |b| colours[b]);
+        let t_arc = std::time::Instant::now();
+        // The centre-line samples of the cue ball's streak lie on its rolling line (the joint
+        // fit put them there): an arc that ends beyond the first of them contradicts them (at
+        // small psi a long shallow arc can rival the true short one in the pixels).
+        let u_th = (geometry.theta.cos(), geometry.theta.sin());
+        let along = |q: (f64, f64)| (q.0 - geometry.p.0) * u_th.0 + (q.1 - geometry.p.1) * u_th.1;
+        let first_sample = pb
+            .out1
+            .as_ref()
+            .and_then(|v| v.iter().map(|q| along((q.x, q.y))).reduce(f64::min));
+        let measured = (opts.arc_pixels && opts.path_models == PathModels::Auto)
+            .then(|| arc::fit(&sig, cue_u, &geometry))
+            .flatten()
+            .filter(|a| {
+                let end = along(a.end);
+                first_sample.is_none_or(|f| end <= f + 0.5 * geometry.r)
+            });
+        if let Some(a) = measured {
+            if debug {
+                eprintln!(
+                    "arc ({:.0} ms): delta {:.3}° ± {:.3}° L0 {:.1} L1 {:.1} px n {} rms {:.3}",
+                    t_arc.elapsed().as_secs_f64() * 1e3,
+                    deg(m * wrap(a.delta - alpha)),
+                    deg(a.delta_sd),
+                    a.l0,
+                    a.l1,
+                    a.n_px,
+                    a.rms
+                );
+            }
+            // The arc fit states its own honest sigma (correlation and systematic parts).
+            let sd = a.delta_sd;
+            if sd <= unresolved {
+                out.delta1_deg = Some(deg(m * wrap(a.delta - alpha)));
+                out.delta1_err_deg = Some(deg(sd));
+                delta1_from_arc = true;
+            }
+        }
         // A start tangent more than 90° from the rolling direction is not a sliding arc.
         if let Some(d) = out.delta1_deg
             && wrap((d - deg(m * wrap(fit.params[it]))).to_radians()).abs()
@@ -923,6 +990,9 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     let (id, it) = fit.angle_indices(2).expect("object ball always has a path");
     (out.delta2_deg, out.delta2_err_deg) = angle(id, "delta2");
     (out.theta2_deg, out.theta2_err_deg) = angle(it, "theta2");
+    if delta1_from_arc {
+        notes.retain(|n| !n.starts_with("delta1"));
+    }
     out.path_model1 = fit.m1.map(|m| m.name().to_string());
     out.path_model2 = Some(fit.m2.name().to_string());
     out.ball_radius_px = Some(fit.r());
