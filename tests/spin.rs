@@ -11,8 +11,10 @@
 //!   (seed 8): 31 of 36 rows ok; psi and theta within 0.1–0.3° (a −0.1 px ball-radius bias at
 //!   this 1200×800 scale); mu 0.0729 ± 0.0012 and r within 2 sigma for 24 of 25 shots, both
 //!   checked. `e` is not checked: with unknown spin it rests on `delta1` alone (without it `e` is
-//!   not identified) and the extractor's `delta1` is biased low by 0.05–8° (issue 4); measured
-//!   e 0.940 ± 0.011 against 0.97.
+//!   not identified). Session 2 (centre-line `delta1`, biased towards `theta1`): e 0.940 ± 0.011.
+//!   Session 3 (`delta1` from the pixels around the impact, `vision::arc`, biased the other way
+//!   by a few tenths of a degree): e 0.991 ± 0.003 against 0.97, mu 0.0725 ± 0.0010, r within
+//!   2 sigma for 28 of 30 shots (issue 4).
 //!
 //! Run with `cargo test --release --test spin`.
 
@@ -194,7 +196,7 @@ fn synth_extract_fit_recovers_spin_and_coefficients() {
         );
     }
     // e is not checked: with free spin it rests on delta1 alone, which the extractor biases
-    // (issue 4; measured e 0.940 ± 0.011 against 0.97, see the module doc).
+    // (issue 4; measured e 0.991 ± 0.003 against 0.97, see the module doc).
     check(&fit(&rows), &truth, "extracted angles", false);
     std::fs::remove_dir_all(&dir).unwrap();
 }
