@@ -298,11 +298,10 @@ fn angle_table_round_trip_feeds_the_fit() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Issue 8: mixed follow/stun/draw with English, spin unknown to the fit.
-#[test]
-fn estimates_per_shot_spin_with_the_coefficients() {
-    let [(_, billiard), _, _] = paper_materials();
-    let mut s = spec("billiard", billiard, 80, 8);
+/// 80 billiard shots at psi 15–65°, mixed follow/stun/draw (r in [-1, 1.5)) with English
+/// |s| < 0.3, the spins not written to the table.
+fn mixed_spin_billiard(billiard: Coefficients, seed: u64) -> SyntheticSpec {
+    let mut s = spec("billiard", billiard, 80, seed);
     s.psi_lo_deg = 15.0;
     s.psi_hi_deg = 65.0;
     s.spin = SyntheticSpin::Mixed {
@@ -311,6 +310,14 @@ fn estimates_per_shot_spin_with_the_coefficients() {
         s_max: 0.3,
         write: false,
     };
+    s
+}
+
+/// Issue 8: mixed follow/stun/draw with English, spin unknown to the fit.
+#[test]
+fn estimates_per_shot_spin_with_the_coefficients() {
+    let [(_, billiard), _, _] = paper_materials();
+    let s = mixed_spin_billiard(billiard, 8);
     let (rows, truth) = synthetic_table(&s);
     let opts = FitOptions {
         spin: SpinMode::Estimate,
@@ -365,15 +372,7 @@ fn spin_coverage_over_seeds() {
     let (mut ok, mut n, mut worst_e, mut worst_mu) = (0, 0, 0.0f64, 0.0f64);
     let mut errs: Vec<f64> = Vec::new();
     for seed in 0..10u64 {
-        let mut s = spec("billiard", billiard, 80, 100 + seed);
-        s.psi_lo_deg = 15.0;
-        s.psi_hi_deg = 65.0;
-        s.spin = SyntheticSpin::Mixed {
-            r_lo: -1.0,
-            r_hi: 1.5,
-            s_max: 0.3,
-            write: false,
-        };
+        let s = mixed_spin_billiard(billiard, 100 + seed);
         let (rows, truth) = synthetic_table(&s);
         let out = fit_materials(&rows, &opts).unwrap();
         let f = &out.fits[0];

@@ -346,18 +346,10 @@ impl Pixels {
                 }
             }
         }
-        for a in 0..NLIN {
-            for b in 0..a {
-                ata[(a, b)] = ata[(b, a)];
-            }
-        }
         // Column scaling keeps the dwell (≈ R) and baseline (≈ 1) columns comparable.
-        let scale: Vec<f64> = (0..NLIN).map(|a| ata[(a, a)].sqrt().max(1e-300)).collect();
-        let mut m = ata.clone();
+        let scale = symmetrise_and_scale(&mut ata);
+        let mut m = ata;
         for a in 0..NLIN {
-            for b in 0..NLIN {
-                m[(a, b)] /= scale[a] * scale[b];
-            }
             m[(a, a)] += 1e-12;
         }
         let rhs = DVector::from_iterator(NLIN, (0..NLIN).map(|a| atb[a] / scale[a]));
@@ -371,6 +363,24 @@ impl Pixels {
             .collect();
         Some((coef, res))
     }
+}
+
+/// Fills the lower triangle of a normal matrix accumulated in its upper one, and scales it to
+/// unit diagonal; returns the scale `sqrt(diag)` (a column's solution divides by it).
+fn symmetrise_and_scale(m: &mut DMatrix<f64>) -> Vec<f64> {
+    let n = m.nrows();
+    for a in 0..n {
+        for b in 0..a {
+            m[(a, b)] = m[(b, a)];
+        }
+    }
+    let scale: Vec<f64> = (0..n).map(|a| m[(a, a)].sqrt().max(1e-300)).collect();
+    for a in 0..n {
+        for b in 0..n {
+            m[(a, b)] /= scale[a] * scale[b];
+        }
+    }
+    scale
 }
 
 fn cost(res: &[f64], keep: &[bool]) -> f64 {
@@ -542,6 +552,12 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
         *k = r.abs() <= 4.0 * s;
     }
     let (x, _) = levenberg_marquardt(&px, g, x, &keep, 15)?;
+    // An arc much shorter than the ball's radius lies inside the cue ball's own footprint at
+    // P: its start tangent is not in the light (at small psi such fits collapsed onto the
+    // rolling line, 30–48° off, with small stated errors).
+    if x[1].abs() + 0.5 < MIN_ARC_R * g.r {
+        return None;
+    }
     // Covariance of the full problem (3 nonlinear + linear amplitudes) at the optimum.
     let out = px.outgoing(g, &x);
     let (coef, res) = px.project(&out, &keep)?;
@@ -578,26 +594,10 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
             }
         }
     }
-    for a in 0..np {
-        for b in 0..a {
-            jtj[(a, b)] = jtj[(b, a)];
-        }
-    }
-    let scale: Vec<f64> = (0..np).map(|a| jtj[(a, a)].sqrt().max(1e-300)).collect();
-    for a in 0..np {
-        for b in 0..np {
-            jtj[(a, b)] /= scale[a] * scale[b];
-        }
-    }
+    let scale = symmetrise_and_scale(&mut jtj);
     let cov = jtj.try_inverse()?;
     let var = s2 * correlation_factor(&px, &res, &keep, g.r) * cov[(0, 0)] / (scale[0] * scale[0]);
     if !(var.is_finite() && var > 0.0) {
-        return None;
-    }
-    // An arc much shorter than the ball's radius lies inside the cue ball's own footprint at
-    // P: its start tangent is not in the light (at small psi such fits collapsed onto the
-    // rolling line, 30–48° off, with small stated errors).
-    if x[1].abs() + 0.5 < MIN_ARC_R * g.r {
         return None;
     }
     if let Some(path) = std::env::var_os("STREAKFIT_ARC_DUMP") {
