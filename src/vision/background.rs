@@ -38,6 +38,8 @@ pub struct Signal {
     pub u: [f32; 3],
     /// Median full-resolution cloth signal level `u·B` (for overlays and sanity checks).
     pub cloth_level: f32,
+    /// Whether a background plate was subtracted (the cloth's texture is then gone too).
+    pub plate: bool,
 }
 
 impl Signal {
@@ -330,6 +332,7 @@ pub fn build(
         sigma_coarse,
         u,
         cloth_level,
+        plate: plate.is_some(),
     })
 }
 
