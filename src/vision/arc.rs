@@ -100,7 +100,7 @@ impl Kernel {
     /// half pixels and are bilinear (another 1/4); a uniform ramp of that variance is `w` wide.
     fn for_cells(r: f64, b: usize) -> Kernel {
         let b2 = (b * b) as f64;
-        let w2 = if b % 2 == 0 { b2 + 3.0 } else { b2 };
+        let w2 = if b.is_multiple_of(2) { b2 + 3.0 } else { b2 };
         Kernel::new(r, w2.max(1.0).sqrt())
     }
 }
