@@ -36,6 +36,7 @@
 //! ball (its waiting disc and its streak) are left out; outliers beyond 4 MAD are dropped once.
 
 use super::background::{Signal, mad_sigma};
+use super::streak::seg_dist2;
 use nalgebra::{DMatrix, DVector};
 
 /// Result of the pixel fit of the sliding arc (image angles, radians).
@@ -176,9 +177,15 @@ fn piece_dwell(q: (f64, f64), a: (f64, f64), b: (f64, f64), dens: f64, k: &Kerne
 /// A straight piece of a path: start, end, dwell density (time per unit length).
 type Piece = ((f64, f64), (f64, f64), f64);
 
+/// The Bézier legs `(L₀, L₁)` of the parameters: kept positive and at least half a pixel, so
+/// the optimiser may cross zero without a degenerate arc.
+fn legs(x: &[f64; 3]) -> (f64, f64) {
+    (x[1].abs() + 0.5, x[2].abs() + 0.5)
+}
+
 /// The outgoing path's pieces `(a, b, density)` for `(δ, L₀, L₁)`, rolling speed 1.
 fn outgoing_pieces(g: &ArcGeometry, x: &[f64; 3]) -> Vec<Piece> {
-    let (delta, l0, l1) = (x[0], x[1].abs() + 0.5, x[2].abs() + 0.5);
+    let (delta, (l0, l1)) = (x[0], legs(x));
     let (u0, u1) = (unit(delta), unit(g.theta));
     let s = g.p;
     let c = (s.0 + l0 * u0.0, s.1 + l0 * u0.1);
@@ -205,17 +212,6 @@ fn outgoing_pieces(g: &ArcGeometry, x: &[f64; 3]) -> Vec<Piece> {
     );
     out.push((e, end, 1.0));
     out
-}
-
-fn dist_to_segment(q: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((q.0 - a.0) * dx + (q.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (q.0 - a.0 - t * dx).hypot(q.1 - a.1 - t * dy)
 }
 
 /// The window's pixels with their fixed columns.
@@ -329,13 +325,13 @@ impl Pixels {
                 let q = (xx as f64, yy as f64);
                 if !polys
                     .iter()
-                    .any(|(a, b)| dist_to_segment(q, *a, *b) < margin)
+                    .any(|(a, b)| seg_dist2(q, *a, *b) < margin * margin)
                 {
                     continue;
                 }
                 // The object ball: its waiting disc (bright, shaded, with a highlight) and
                 // its streak are not modelled.
-                if dist_to_segment(q, g.o, obj_end) < r + 3.0 + half {
+                if seg_dist2(q, g.o, obj_end) < (r + 3.0 + half).powi(2) {
                     continue;
                 }
                 let Some(val) = cell(q) else {
@@ -384,6 +380,13 @@ impl Pixels {
                 (d0, d2)
             })
             .collect()
+    }
+
+    /// Projected cost and residuals at the nonlinear parameters `x` (amplitudes eliminated).
+    fn evaluate(&self, g: &ArcGeometry, x: &[f64; 3], keep: &[bool]) -> Option<(f64, Vec<f64>)> {
+        let out = self.outgoing(g, x);
+        let (_, res) = self.project(&out, keep)?;
+        Some((cost(&res, keep), res))
     }
 
     /// Linear least squares of the amplitudes given the outgoing columns; returns the
@@ -457,11 +460,7 @@ fn levenberg_marquardt(
     keep: &[bool],
     max_iter: usize,
 ) -> Option<([f64; 3], Vec<f64>)> {
-    let eval = |x: &[f64; 3]| -> Option<(f64, Vec<f64>)> {
-        let out = px.outgoing(g, x);
-        let (_, res) = px.project(&out, keep)?;
-        Some((cost(&res, keep), res))
-    };
+    let eval = |x: &[f64; 3]| px.evaluate(g, x, keep);
     let (mut f, mut res) = eval(&x)?;
     let mut lm = 1e-3;
     for _ in 0..max_iter {
@@ -584,14 +583,9 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
         return None;
     }
     let all = vec![true; coarse.q.len()];
-    let eval = |px: &Pixels, x: &[f64; 3], keep: &[bool]| -> Option<f64> {
-        let out = px.outgoing(g, x);
-        let (_, res) = px.project(&out, keep)?;
-        Some(cost(&res, keep))
-    };
     let mut best: Option<([f64; 3], f64)> = None;
     for c in &cands {
-        if let Some(f) = eval(&coarse, c, &all)
+        if let Some((f, _)) = coarse.evaluate(g, c, &all)
             && best.is_none_or(|b| f < b.1)
         {
             best = Some((*c, f));
@@ -614,7 +608,8 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
     // An arc much shorter than the ball's radius lies inside the cue ball's own footprint at
     // P: its start tangent is not in the light (at small psi such fits collapsed onto the
     // rolling line, 30–48° off, with small stated errors).
-    if x[1].abs() + 0.5 < MIN_ARC_R * g.r {
+    let (l0, l1) = legs(&x);
+    if l0 < MIN_ARC_R * g.r {
         return None;
     }
     // Covariance of the full problem (3 nonlinear + linear amplitudes) at the optimum.
@@ -673,15 +668,12 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
             .to_radians()
             .powi(2))
         .sqrt(),
-        l0: x[1].abs() + 0.5,
-        l1: x[2].abs() + 0.5,
-        end: {
-            let (l0, l1) = (x[1].abs() + 0.5, x[2].abs() + 0.5);
-            (
-                g.p.0 + l0 * x[0].cos() + l1 * g.theta.cos(),
-                g.p.1 + l0 * x[0].sin() + l1 * g.theta.sin(),
-            )
-        },
+        l0,
+        l1,
+        end: (
+            g.p.0 + l0 * x[0].cos() + l1 * g.theta.cos(),
+            g.p.1 + l0 * x[0].sin() + l1 * g.theta.sin(),
+        ),
         n_px: n,
         rms: s2.sqrt(),
     })

@@ -806,7 +806,8 @@ pub struct Exclusion {
     pub discs: Vec<((f64, f64), f64)>,
 }
 
-fn seg_dist2(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+/// Squared distance from `p` to the segment `a → b`.
+pub(super) fn seg_dist2(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     let l2 = dx * dx + dy * dy;
     let t = if l2 > 0.0 {
