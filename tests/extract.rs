@@ -138,10 +138,13 @@ fn realistic_tier_accuracy() {
     let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
     assert!(ok >= 4, "ok {ok}/6: {rows:#?}");
     let m = |k: &str| median(errs[k].clone());
-    // Measured 2026-11-22: psi 0.26°, theta1 0.29°, theta2 0.20°.
+    // Measured 2026-11-23 (renderer with continuous rolling deceleration): 6/6 ok, psi 0.54°,
+    // theta1 0.39°, theta2 0.43° (sigma ratios 1.1, 0.7, 1.0); two of the six have theta2 errors
+    // of 0.75° at stated sigmas of 0.56° and 0.70°. On the 24 realistic shots of
+    // docs/accuracy.sh the medians are psi 0.16°, theta1 0.15°, theta2 0.17°.
     assert!(m("psi") < 0.8, "psi median error {}", m("psi"));
     assert!(m("theta1") < 0.9, "theta1 median error {}", m("theta1"));
-    assert!(m("theta2") < 0.6, "theta2 median error {}", m("theta2"));
+    assert!(m("theta2") < 0.9, "theta2 median error {}", m("theta2"));
 }
 
 #[test]
