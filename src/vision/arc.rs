@@ -364,17 +364,8 @@ impl Pixels {
                 let (sx, sy) = ((q.0 - g.p.0) / (3.0 * r), (q.1 - g.p.1) / (3.0 * r));
                 px.q.push(q);
                 px.v.push(val);
-                px.fixed.push([
-                    e.d0,
-                    e.d2,
-                    e.ramp,
-                    1.0,
-                    sx,
-                    sy,
-                    sx * sx,
-                    sx * sy,
-                    sy * sy,
-                ]);
+                px.fixed
+                    .push([e.d0, e.d2, e.ramp, 1.0, sx, sy, sx * sx, sx * sy, sy * sy]);
             }
         }
         px
@@ -899,7 +890,10 @@ fn dump2(px: &Pixels, res: &[f64], path: &std::path::Path, stride: usize) {
     let vmax = px.v.iter().cloned().fold(0.0, f64::max);
     let rmax = res.iter().map(|r| r.abs()).fold(0.0, f64::max);
     eprintln!("dump2: vmax {vmax:.4} rmax {rmax:.4}");
-    let k: f64 = std::env::var("ARC_GAIN").ok().and_then(|s| s.parse().ok()).unwrap_or(20.0);
+    let k: f64 = std::env::var("ARC_GAIN")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20.0);
     for (i, q) in px.q.iter().enumerate() {
         let (cx, cy) = (((q.0 - x0) / s) as u32, ((q.1 - y0) / s) as u32);
         let d = (255.0 * px.v[i] / vmax).clamp(0.0, 255.0) as u8;
