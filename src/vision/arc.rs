@@ -86,6 +86,8 @@ const N_RADII: usize = 8;
 struct Kernel {
     r: f64,
     rho: [f64; N_RADII],
+    /// Their squares.
+    rho2: [f64; N_RADII],
     /// Largest radius: a pixel farther than this from a piece is not covered.
     rmax: f64,
 }
@@ -96,6 +98,7 @@ impl Kernel {
         Kernel {
             r,
             rho,
+            rho2: rho.map(|r| r * r),
             rmax: r + 0.5 * w,
         }
     }
@@ -153,47 +156,89 @@ fn unit(a: f64) -> (f64, f64) {
     (a.cos(), a.sin())
 }
 
-/// Flat, `d²/R²`-weighted and ramp dwell of pixel `q` for a disc moving along `a → b` with dwell
-/// density `dens` (time per unit length), averaged over the kernel's radii. The ramp weights the
-/// flat dwell by the distance from `a` (in `R`): a ball that decelerates along a straight piece
-/// (rolling resistance, some 4 % of the speed per `R` for a slow billiard ball) brightens
-/// linearly along it, `1/v(s) ≈ (1 + k s)/v(0)`.
-#[inline]
-fn piece_dwell(q: (f64, f64), a: (f64, f64), b: (f64, f64), dens: f64, k: &Kernel) -> Dwell {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let len = dx.hypot(dy);
-    if len <= 0.0 {
-        return Dwell::default();
+/// A straight piece prepared for many pixels: start, unit direction, length, dwell density.
+/// Its length and direction are computed once per piece instead of once per pixel (the arc's
+/// 48 pieces are visited by every pixel near it).
+#[derive(Debug, Clone, Copy)]
+struct Prepared {
+    a: (f64, f64),
+    d: (f64, f64),
+    len: f64,
+    dens: f64,
+}
+
+impl Prepared {
+    fn new(a: (f64, f64), b: (f64, f64), dens: f64) -> Prepared {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let len = dx.hypot(dy);
+        let d = if len > 0.0 {
+            (dx / len, dy / len)
+        } else {
+            (0.0, 0.0)
+        };
+        Prepared { a, d, len, dens }
     }
-    let d = (dx / len, dy / len);
-    let (wx, wy) = (q.0 - a.0, q.1 - a.1);
-    let x = wx * d.0 + wy * d.1;
-    let y = d.0 * wy - d.1 * wx;
-    let rmax = k.rmax;
-    if y.abs() >= rmax || x < -rmax || x > len + rmax {
-        return Dwell::default();
-    }
-    let wgt = dens / N_RADII as f64;
-    let r2 = k.r * k.r;
-    let (mut f0, mut f2, mut f1) = (0.0, 0.0, 0.0);
-    for &rho in &k.rho {
-        if y.abs() >= rho {
-            continue;
+
+    /// Flat, `d²/R²`-weighted and ramp dwell of pixel `q` for a disc moving along the piece,
+    /// averaged over the kernel's radii. The ramp weights the flat dwell by the distance from
+    /// `a` (in `R`): a ball that decelerates along a straight piece (rolling resistance, some
+    /// 4 % of the speed per `R` for a slow billiard ball) brightens linearly along it,
+    /// `1/v(s) ≈ (1 + k s)/v(0)`.
+    ///
+    /// A radius whose chord `2h` spans the whole piece (`h ≥ max(x, L - x)`, the common case
+    /// for the arc's pieces of a few px) contributes the same amount as every larger radius:
+    /// it is computed once and added without the square root. The test keeps a relative
+    /// margin of 1e-12, so a radius takes the shortcut only where the general formula clamps
+    /// both ends exactly: the sums are the same to the last bit.
+    #[inline]
+    fn dwell(&self, q: (f64, f64), k: &Kernel) -> Dwell {
+        let len = self.len;
+        if len <= 0.0 {
+            return Dwell::default();
         }
-        let h = (rho * rho - y * y).sqrt();
-        let lo = (x - h).max(0.0);
-        let hi = (x + h).min(len);
-        if hi > lo {
-            f0 += wgt * (hi - lo);
-            let cube = ((x - lo).powi(3) - (x - hi).powi(3)) / 3.0;
-            f2 += wgt * (y * y * (hi - lo) + cube) / r2;
-            f1 += wgt * 0.5 * (hi * hi - lo * lo) / k.r;
+        let d = self.d;
+        let (wx, wy) = (q.0 - self.a.0, q.1 - self.a.1);
+        let x = wx * d.0 + wy * d.1;
+        let y = d.0 * wy - d.1 * wx;
+        let rmax = k.rmax;
+        if y.abs() >= rmax || x < -rmax || x > len + rmax {
+            return Dwell::default();
         }
-    }
-    Dwell {
-        d0: f0,
-        d2: f2,
-        ramp: f1,
+        let wgt = self.dens / N_RADII as f64;
+        let r2 = k.r * k.r;
+        let y2 = y * y;
+        let t = x.max(len - x);
+        let full_above = t * t * (1.0 + 1e-12);
+        let full0 = wgt * len;
+        let full2 = wgt * (y2 * len + (x.powi(3) - (x - len).powi(3)) / 3.0) / r2;
+        let full1 = wgt * 0.5 * (len * len) / k.r;
+        let (mut f0, mut f2, mut f1) = (0.0, 0.0, 0.0);
+        for (&rho, &rho2) in k.rho.iter().zip(&k.rho2) {
+            if y.abs() >= rho {
+                continue;
+            }
+            let s = rho2 - y2;
+            if s > full_above {
+                f0 += full0;
+                f2 += full2;
+                f1 += full1;
+                continue;
+            }
+            let h = s.sqrt();
+            let lo = (x - h).max(0.0);
+            let hi = (x + h).min(len);
+            if hi > lo {
+                f0 += wgt * (hi - lo);
+                let cube = ((x - lo).powi(3) - (x - hi).powi(3)) / 3.0;
+                f2 += wgt * (y2 * (hi - lo) + cube) / r2;
+                f1 += wgt * 0.5 * (hi * hi - lo * lo) / k.r;
+            }
+        }
+        Dwell {
+            d0: f0,
+            d2: f2,
+            ramp: f1,
+        }
     }
 }
 
@@ -324,7 +369,7 @@ impl Pixels {
             g.o.0 + 8.0 * r * g.object_dir.0,
             g.o.1 + 8.0 * r * g.object_dir.1,
         );
-        let inc_pieces = (inc_a, g.p, 1.0);
+        let inc_piece = Prepared::new(inc_a, g.p, 1.0);
         let kernel = Kernel::for_cells(r, stride);
         // Offsets of the cell's pixels around its centre (half-pixel ones are bilinear).
         let half = (stride as f64 - 1.0) / 2.0;
@@ -360,7 +405,7 @@ impl Pixels {
                 let Some(val) = cell(q) else {
                     continue;
                 };
-                let e = piece_dwell(q, inc_pieces.0, inc_pieces.1, inc_pieces.2, &kernel);
+                let e = inc_piece.dwell(q, &kernel);
                 let (sx, sy) = ((q.0 - g.p.0) / (3.0 * r), (q.1 - g.p.1) / (3.0 * r));
                 px.q.push(q);
                 px.v.push(val);
@@ -374,8 +419,12 @@ impl Pixels {
     /// Outgoing columns for the nonlinear parameters `x`.
     fn outgoing(&self, g: &ArcGeometry, x: &[f64; 3]) -> Vec<Dwell> {
         let pieces = outgoing_pieces(g, x);
+        let prepared: Vec<Prepared> = pieces
+            .iter()
+            .map(|&(a, b, d)| Prepared::new(a, b, d))
+            .collect();
         // Pixels away from the arc only see the rolling line (the last piece).
-        let (arc, line) = pieces.split_at(pieces.len() - 1);
+        let arc = &pieces[..pieces.len() - 1];
         let reach = self.kernel.rmax + 1.0;
         let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
         for (a, b, _) in arc {
@@ -388,10 +437,14 @@ impl Pixels {
             .iter()
             .map(|&q| {
                 let near_arc = q.0 >= x0 && q.0 <= x1 && q.1 >= y0 && q.1 <= y1;
-                let used = if near_arc { &pieces[..] } else { line };
+                let used = if near_arc {
+                    &prepared[..]
+                } else {
+                    &prepared[arc.len()..]
+                };
                 let mut sum = Dwell::default();
-                for &(a, b, d) in used {
-                    let f = piece_dwell(q, a, b, d, &self.kernel);
+                for piece in used {
+                    let f = piece.dwell(q, &self.kernel);
                     sum.d0 += f.d0;
                     sum.d2 += f.d2;
                     // Only the rolling line (the last piece) decelerates at a constant rate;
