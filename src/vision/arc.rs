@@ -158,7 +158,7 @@ fn unit(a: f64) -> (f64, f64) {
 
 /// A straight piece prepared for many pixels: start, unit direction, length, dwell density.
 /// Its length and direction are computed once per piece instead of once per pixel (the arc's
-/// 48 pieces are visited by every pixel near it).
+/// 16 pieces are visited by every pixel near it).
 #[derive(Debug, Clone, Copy)]
 struct Prepared {
     a: (f64, f64),
@@ -288,7 +288,7 @@ struct Pixels {
     kernel: Kernel,
     q: Vec<(f64, f64)>,
     v: Vec<f64>,
-    /// Incoming (2) and baseline (6) columns, row-major per pixel.
+    /// Incoming (3) and baseline (6) columns, row-major per pixel.
     fixed: Vec<[f64; NFIX]>,
 }
 
