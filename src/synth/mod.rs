@@ -568,8 +568,9 @@ fn motion(p: &ShotPlan) -> (Motion, impulse::ImpactState) {
 /// Cuts the path `pos` (impact frame, m) over `[ta, tb]` into image segments traversed at
 /// nearly constant speed: a piece is accepted when its projected length is at most `3 R_px`, the
 /// path at its mid-time lies within [`SIDE_TOLERANCE_PX`] of its chord sideways and within
-/// [`ALONG_TOLERANCE`] of its length from the chord's midpoint (which bounds the deceleration);
-/// otherwise it is halved.
+/// [`ALONG_TOLERANCE`] of its length (or [`SIDE_TOLERANCE_PX`], whichever is larger, so that
+/// pieces of a few px are not split for speed changes that move their dwell by less than that)
+/// from the chord's midpoint (which bounds the deceleration); otherwise it is halved.
 fn push_segments(
     out: &mut Vec<Segment>,
     cam: &Camera,
