@@ -104,14 +104,25 @@ impl Backdrop {
     }
 
     /// Cloth albedo at pixel `(x, y)`: base colour times a texture of two octaves of value noise
-    /// (pile and stains) and per-pixel weave grain.
+    /// (pile and stains) and per-pixel weave grain, plus a chromatic part: an independent
+    /// stain-scale noise per channel of [`CHROMA`] × the texture's amplitude (faded patches, dye
+    /// and chalk change hue as well as brightness, so the cloth's texture is not a pure scaling
+    /// of one colour that a projection could remove exactly).
     pub fn cloth(&self, x: u32, y: u32) -> [f32; 3] {
         let (xf, yf) = (x as f32, y as f32);
         let t = 0.55 * value_noise(xf / 90.0, yf / 90.0, self.texture_seed)
             + 0.3 * value_noise(xf / 11.0, yf / 11.0, self.texture_seed ^ 0x9e37)
             + 0.25 * hash01(x as i64, y as i64, self.texture_seed ^ 0x51ed);
-        let m = 1.0 + self.texture * t;
-        self.cloth_rgb.map(|c| c * m)
+        let mut out = self.cloth_rgb;
+        for (c, v) in out.iter_mut().enumerate() {
+            let tc = value_noise(
+                xf / CHROMA_SCALE,
+                yf / CHROMA_SCALE,
+                chroma_seed(self.texture_seed, c),
+            );
+            *v *= 1.0 + self.texture * (t + CHROMA * tc);
+        }
+        out
     }
 
     /// Lit cloth without balls at pixel `(x, y)`: illumination × cloth albedo (DN). Stored as
@@ -132,15 +143,19 @@ impl Backdrop {
             let yf = y as f32;
             let mut coarse = NoiseRow::new(yf / 90.0, self.texture_seed);
             let mut fine = NoiseRow::new(yf / 11.0, self.texture_seed ^ 0x9e37);
+            let mut chroma: [NoiseRow; 3] = std::array::from_fn(|c| {
+                NoiseRow::new(yf / CHROMA_SCALE, chroma_seed(self.texture_seed, c))
+            });
             let py = y as f64 + 0.5;
             for x in 0..w {
                 let xf = x as f32;
                 let t = 0.55 * coarse.at(xf / 90.0)
                     + 0.3 * fine.at(xf / 11.0)
                     + 0.25 * hash01(x as i64, y as i64, self.texture_seed ^ 0x51ed);
-                let m = 1.0 + self.texture * t;
                 let l = self.illumination(x as f64 + 0.5, py);
                 for c in 0..3 {
+                    let tc = chroma[c].at(xf / CHROMA_SCALE);
+                    let m = 1.0 + self.texture * (t + CHROMA * tc);
                     row[x * 3 + c] = (l * (self.cloth_rgb[c] * m) as f64) as f32;
                 }
             }
@@ -153,6 +168,15 @@ impl Backdrop {
         let n = (x * x + y * y + z * z).sqrt();
         [x / n, y / n, z / n]
     }
+}
+
+/// Amplitude of the cloth's chromatic texture relative to its brightness texture.
+pub const CHROMA: f32 = 0.25;
+/// Length scale (px) of the chromatic texture: stains and faded patches.
+const CHROMA_SCALE: f32 = 70.0;
+
+fn chroma_seed(seed: u64, channel: usize) -> u64 {
+    seed ^ 0xC0_10_0E ^ (channel as u64 + 1).wrapping_mul(0x2545_F491_4F6C_DD1D)
 }
 
 /// Integer hash to [-1, 1].

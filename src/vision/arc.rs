@@ -371,6 +371,7 @@ impl Pixels {
         );
         let inc_piece = Prepared::new(inc_a, g.p, 1.0);
         let kernel = Kernel::for_cells(r, stride);
+        let u = sig.projector(u);
         // Offsets of the cell's pixels around its centre (half-pixel ones are bilinear).
         let half = (stride as f64 - 1.0) / 2.0;
         let cell = |q: (f64, f64)| -> Option<f64> {

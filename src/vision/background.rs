@@ -7,9 +7,16 @@
 //! one-sided: `r > 2 σ` out, `r < -4 σ` out, `σ = 1.4826 MAD`). With a plate of the empty table,
 //! `B` is the plate itself, which also cancels the fixed cloth texture.
 //!
-//! Balls differ from the cloth along one colour direction per ball; the signal is the projection
-//! `S = u·(I - B)` on the mean ball-minus-cloth direction `u` of all clearly non-cloth pixels,
-//! which keeps `S` linear in the dwell fraction `w` (a norm would not be).
+//! Balls differ from the cloth along one colour direction per ball. The signal of a ball of
+//! colour direction `u` is the projection `S = w·(I - B)` with `w = Σ⁻¹u / (uᵀΣ⁻¹u)`, where `Σ`
+//! is the robust colour covariance of the cloth residual `I - B` (the generalised least-squares
+//! estimate of the amplitude along `u`: `w·u = 1`, so `S` stays linear in the dwell fraction and
+//! keeps the units of `u·(I - B)`). Cloth texture, stains, vignetting and illumination change the
+//! cloth's brightness far more than its hue, so `Σ` is long along the cloth colour and `w` turns
+//! away from it: texture blotches the size of a ball, which swamp a faint streak in `u·(I - B)`,
+//! mostly cancel. With a plate (texture already gone) `Σ` is the sensor noise and `w` only
+//! weights the channels by it. A ball of the cloth's own hue (black, or green on green) gains
+//! nothing, as it should: its light then differs from the cloth only as a blotch does.
 
 use super::image_io::RgbImage;
 use nalgebra::{DMatrix, DVector};
@@ -36,6 +43,10 @@ pub struct Signal {
     pub sigma_coarse: f32,
     /// Unit ball-minus-cloth colour direction.
     pub u: [f32; 3],
+    /// Projection vector of `u` ([`Signal::projector`]): what `coarse` and [`Signal::sample`] use.
+    pub proj: [f32; 3],
+    /// Inverse robust colour covariance of the coarse cloth residual (see the module doc).
+    pub cov_inv: [[f64; 3]; 3],
     /// Median full-resolution cloth signal level `u·B` (for overlays and sanity checks).
     pub cloth_level: f32,
     /// Whether a background plate was subtracted (the cloth's texture is then gone too).
@@ -43,13 +54,20 @@ pub struct Signal {
 }
 
 impl Signal {
-    /// Bilinear sample of the full-resolution signal projected on `self.u`; `None` outside.
+    /// Bilinear sample of the full-resolution signal of the mean ball colour; `None` outside.
     #[inline]
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
-        self.sample_u(x, y, self.u)
+        self.sample_u(x, y, self.proj)
     }
 
-    /// Bilinear sample of the full-resolution signal projected on colour direction `u`.
+    /// The projection vector `w = Σ⁻¹u / (uᵀΣ⁻¹u)` of colour direction `u` (module doc): the
+    /// amplitude along `u` of a colour difference, with the cloth's own variation weighted down.
+    pub fn projector(&self, u: [f32; 3]) -> [f32; 3] {
+        projector(&self.cov_inv, u)
+    }
+
+    /// Bilinear sample of the full-resolution RGB projected on vector `u` (a
+    /// [`Signal::projector`], or any fixed weighting of the channels).
     #[inline]
     pub fn sample_u(&self, x: f64, y: f64, u: [f32; 3]) -> Option<f32> {
         if !(x >= 0.0 && y >= 0.0) {
@@ -132,6 +150,57 @@ pub fn mad_sigma(v: &[f32]) -> f32 {
 }
 
 const POLY_DEGREE: usize = 4;
+
+/// Robust colour covariance of residuals that are mostly cloth: start from the per-channel MAD,
+/// then twice keep the points within Mahalanobis distance² 11.34 (99 % of a 3-D Gaussian) of
+/// the median and take their covariance. Regularised by 1e-6 of its trace (a grey image has
+/// equal channels, hence a singular covariance). Returns its inverse.
+pub fn robust_cov_inv(d: &[[f32; 3]]) -> [[f64; 3]; 3] {
+    use nalgebra::{Matrix3, Vector3};
+    let chan = |c: usize| d.iter().map(|v| v[c]).collect::<Vec<f32>>();
+    let med: [f64; 3] = [0, 1, 2].map(|c| median(&mut chan(c)) as f64);
+    let sd: [f64; 3] = [0, 1, 2].map(|c| (mad_sigma(&chan(c)) as f64).max(1e-9));
+    let mut inv = Matrix3::from_diagonal(&Vector3::new(
+        1.0 / (sd[0] * sd[0]),
+        1.0 / (sd[1] * sd[1]),
+        1.0 / (sd[2] * sd[2]),
+    ));
+    for _ in 0..2 {
+        let (mut m, mut n) = (Matrix3::<f64>::zeros(), 0usize);
+        for v in d {
+            let x = Vector3::new(
+                v[0] as f64 - med[0],
+                v[1] as f64 - med[1],
+                v[2] as f64 - med[2],
+            );
+            if (x.transpose() * inv * x)[0] < 11.34 {
+                m += x * x.transpose();
+                n += 1;
+            }
+        }
+        if n < 10 {
+            break;
+        }
+        m /= n as f64;
+        let reg = 1e-6 * m.trace().max(1e-18);
+        match (m + Matrix3::identity() * reg).try_inverse() {
+            Some(i) => inv = i,
+            None => break,
+        }
+    }
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| inv[(i, j)]))
+}
+
+/// `Σ⁻¹u / (uᵀΣ⁻¹u)` for the inverse covariance `ci` (see the module doc).
+pub fn projector(ci: &[[f64; 3]; 3], u: [f32; 3]) -> [f32; 3] {
+    let su: [f64; 3] = [0, 1, 2].map(|i| (0..3).map(|j| ci[i][j] * u[j] as f64).sum());
+    let q: f64 = (0..3).map(|i| su[i] * u[i] as f64).sum();
+    if q.is_finite() && q > 0.0 {
+        su.map(|v| (v / q) as f32)
+    } else {
+        u
+    }
+}
 
 fn poly_terms(x: f64, y: f64, out: &mut Vec<f64>) {
     out.clear();
@@ -300,9 +369,11 @@ pub fn build(
         (acc[1] / norm) as f32,
         (acc[2] / norm) as f32,
     ];
+    let cov_inv = robust_cov_inv(&diff);
+    let proj = projector(&cov_inv, u);
     let coarse: Vec<f32> = diff
         .iter()
-        .map(|d| u[0] * d[0] + u[1] * d[1] + u[2] * d[2])
+        .map(|d| proj[0] * d[0] + proj[1] * d[1] + proj[2] * d[2])
         .collect();
     let sigma_coarse = mad_sigma(&coarse).max(1e-6);
     let mut rgb = img.data.clone();
@@ -331,6 +402,8 @@ pub fn build(
         coarse_diff: diff,
         sigma_coarse,
         u,
+        proj,
+        cov_inv,
         cloth_level,
         plate: plate.is_some(),
     })

@@ -48,18 +48,30 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
     let f = sig.f as f64;
     let rc = r / f;
     let rb = ((rc / 2.0).round() as usize).max(1);
-    // Detection works on every ball colour: the noise-whitened norm of the smoothed colour
-    // difference (a white cue ball and a red object ball can project to nothing on one
-    // direction). Its cloth level is a positive constant, removed by the ring's own median.
+    // Detection works on every ball colour: the Mahalanobis norm of the smoothed colour
+    // difference under the cloth's own colour covariance at this scale (a white cue ball and a
+    // red object ball can project to nothing on one direction; texture blotches, which change
+    // the cloth's brightness more than its hue, are weighted down). Its cloth level is a
+    // positive constant, removed by the ring's own median.
     let chans: Vec<Vec<f32>> = (0..3)
         .map(|c| {
             let v: Vec<f32> = sig.coarse_diff.iter().map(|d| d[c]).collect();
             box_blur(&v, w, h, rb)
         })
         .collect();
-    let sc: Vec<f32> = chans.iter().map(|v| mad_sigma(v).max(1e-7)).collect();
-    let s: Vec<f32> = (0..w * h)
-        .map(|i| ((0..3).map(|c| (chans[c][i] / sc[c]).powi(2)).sum::<f32>()).sqrt())
+    let blurred: Vec<[f32; 3]> = (0..w * h)
+        .map(|i| [chans[0][i], chans[1][i], chans[2][i]])
+        .collect();
+    let ci = super::background::robust_cov_inv(&blurred);
+    let s: Vec<f32> = blurred
+        .iter()
+        .map(|b| {
+            let b = b.map(f64::from);
+            let q: f64 = (0..3)
+                .map(|i| (0..3).map(|j| b[i] * ci[i][j] * b[j]).sum::<f64>())
+                .sum();
+            q.max(0.0).sqrt() as f32
+        })
         .collect();
     let thr = {
         let mut t = s.clone();
@@ -299,6 +311,7 @@ pub fn sample_profile(
     excl: Option<&Exclusion>,
     u: [f32; 3],
 ) -> Option<Profile> {
+    let u = sig.projector(u);
     let n = (-d.1, d.0);
     let half = (1.7 * r).ceil() as i64;
     let n_a = sub_steps(step);
