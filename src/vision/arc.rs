@@ -603,10 +603,12 @@ fn levenberg_marquardt(
 /// px. With a background plate the median |error| is 0.19–0.27° against statistical parts of
 /// 0.03–0.1°, mostly of one sign relative to the turn (the fitted arc turns 0.1–0.3° more than
 /// the true one; a draw shot's −, a follow shot's +): 0.35° gives sigma ratios near 1. Without a
-/// plate the cloth's texture stays in the window and moves the fitted arc by up to 2° between
-/// nearly equal minima: 1.0° is set from the clean set without a plate (median |error| 0.72°).
+/// plate what is left of the cloth's texture after the colour projection ([`super::background`])
+/// moves the fitted arc between nearly equal minima: 0.6° is set from the clean set without a
+/// plate (median |error| 0.39°; it was 0.72° and 1.0° before the projection weighted the
+/// cloth's own colour down).
 const SYSTEMATIC_DELTA_DEG: f64 = 0.35;
-const SYSTEMATIC_DELTA_NO_PLATE_DEG: f64 = 1.0;
+const SYSTEMATIC_DELTA_NO_PLATE_DEG: f64 = 0.6;
 
 /// Variance inflation for spatially correlated residuals (cloth texture, shared noise): the mean
 /// of `n_b m_b² / s²` over blocks of about `R/2` px, `m_b` a block's mean residual, `n_b` its
