@@ -453,6 +453,12 @@ pub struct JointFit {
     pub s2: [f64; 3],
     pub corr: [f64; 3],
     pub bic: f64,
+    /// Profile 1-sigma of each ball's start tangent `delta` (cue ball, object ball), from the
+    /// parabola of the chosen model or, for a straight path, of the richest model
+    /// ([`profile_sd`]); `None` where not computed.
+    pub delta_sd: [Option<f64>; 2],
+    /// The linearised 1-sigma of a parabola's `delta` (before the profile widened it).
+    pub delta_lin: [Option<f64>; 2],
 }
 
 impl JointFit {
@@ -501,6 +507,22 @@ impl JointFit {
             PathModel::ParabolaLine => (off, off + 1),
         })
     }
+    /// Standard error of ball `ball`'s (1 or 2) start tangent: for a parabola its profile-widened
+    /// variance; for a straight path (`delta = theta`) the direction's error and the profile of
+    /// `delta` in the richest model together.
+    pub fn delta_sd(&self, ball: usize) -> f64 {
+        let Some((id, it)) = self.angle_indices(ball) else {
+            return f64::INFINITY;
+        };
+        let prof = self.delta_sd[ball - 1];
+        if id != it {
+            self.sd(id)
+        } else {
+            let p = prof.unwrap_or(0.0);
+            (self.sd(id).powi(2) + p * p).sqrt()
+        }
+    }
+
     /// Standard error of parameter `i`; infinite when the fit does not determine it (a
     /// non-positive variance from an ill-conditioned normal matrix).
     pub fn sd(&self, i: usize) -> f64 {
@@ -825,6 +847,11 @@ impl Model<'_> {
 
 /// Levenberg–Marquardt from `x0`; returns the solution and its evaluation (with Jacobian).
 fn lm(model: &Model, x0: &[f64], s: &FitSettings) -> (Vec<f64>, Eval) {
+    lm_pinned(model, x0, s, None)
+}
+
+/// [`lm`] with parameter `pin` (if any) held at its value in `x0`.
+fn lm_pinned(model: &Model, x0: &[f64], s: &FitSettings, pin: Option<usize>) -> (Vec<f64>, Eval) {
     let mut x = x0.to_vec();
     let mut ev = model.eval(&x, true);
     let mut cost = ev.cost();
@@ -833,7 +860,16 @@ fn lm(model: &Model, x0: &[f64], s: &FitSettings) -> (Vec<f64>, Eval) {
     for _ in 0..s.lm_max_iter {
         let (a, g) = {
             let j = ev.j.as_ref().expect("evaluated with the Jacobian");
-            normal_equations(j, &ev.r, &ev.bounds, &cols, [1.0; 4])
+            let (mut a, mut g) = normal_equations(j, &ev.r, &ev.bounds, &cols, [1.0; 4]);
+            if let Some(p) = pin {
+                for i in 0..a.nrows() {
+                    a[(p, i)] = 0.0;
+                    a[(i, p)] = 0.0;
+                }
+                a[(p, p)] = 1.0;
+                g[p] = 0.0;
+            }
+            (a, g)
         };
         let mut improved = false;
         for _ in 0..12 {
@@ -967,6 +1003,92 @@ fn covariance(a: &DMatrix<f64>) -> Option<DMatrix<f64>> {
         }
     }
     Some(cov)
+}
+
+/// Farthest the profile of a start tangent is walked (radians): beyond it the angle counts as
+/// undetermined.
+const PROFILE_SPAN: f64 = 0.5;
+
+/// 1-sigma of parameter `idx` from the profile of the group-weighted cost (the cost whose
+/// curvature is the covariance): walked out on each side from `x` in doubling steps (first
+/// `sd_lin`) with the parameter pinned and the rest refitted, until it rises by 1; the crossing
+/// is interpolated in `sqrt(Δ)`; the larger side counts. Why: a sliding parabola whose curved
+/// part lies where no centre-line sample is (inside the waiting disc's keep-out, under the
+/// incoming streak) leaves a valley of arcs from P or O to the rolling line, short and sharp to
+/// long and shallow; the curvature at the optimum sees only its floor's local width (rubber
+/// balls: `delta2` 0.4–3.3° off with stated sigmas of 0.05–0.5°).
+fn profile_sd(
+    model: &Model,
+    x: &[f64],
+    idx: usize,
+    sd_lin: f64,
+    w: [f64; 4],
+    s: &FitSettings,
+) -> f64 {
+    let wcost = |ev: &Eval| -> f64 {
+        (0..4)
+            .map(|g| {
+                w[g] * ev.r[ev.bounds[g]..ev.bounds[g + 1]]
+                    .iter()
+                    .map(|v| v * v)
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    let c0 = wcost(&model.eval(x, false));
+    // Each refit starts on the valley floor next to the last one: a few iterations suffice.
+    let pinned = FitSettings {
+        lm_max_iter: s.lm_max_iter.min(10),
+        ..*s
+    };
+    let mut worst: f64 = 0.0;
+    for dir in [-1.0, 1.0] {
+        let mut xs = x.to_vec();
+        let (mut prev_off, mut prev_root) = (0.0, 0.0);
+        // Steps below 0.1° would only refine an interval that ends far below the 10° at which an
+        // angle counts as unresolved; each costs a refit.
+        let mut step = sd_lin.max(0.1f64.to_radians());
+        let mut side = PROFILE_SPAN;
+        loop {
+            let off = (prev_off + step).min(PROFILE_SPAN);
+            // Start on the valley floor: keep the rolling line where it is (the arc's lateral
+            // offset L0 sin(δ - θ) and its reach along θ, L0 cos(δ - θ) + L1).
+            let (d_old, th, l0, l1) = (xs[idx], xs[idx + 1], xs[idx + 2].abs(), xs[idx + 3].abs());
+            let d_new = x[idx] + dir * off;
+            let (sin_old, sin_new) = ((d_old - th).sin(), (d_new - th).sin());
+            if sin_new.abs() > 1e-6 && sin_old * sin_new > 0.0 {
+                let l0n = (l0 * sin_old / sin_new).clamp(0.05 * l0, 20.0 * l0);
+                let reach = l0 * (d_old - th).cos() + l1;
+                xs[idx + 2] = l0n;
+                xs[idx + 3] = (reach - l0n * (d_new - th).cos()).max(0.05 * l1);
+            }
+            xs[idx] = d_new;
+            let (xf, ev) = lm_pinned(model, &xs, &pinned, Some(idx));
+            let root = (wcost(&ev) - c0).max(0.0).sqrt();
+            if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                eprintln!(
+                    "profile p{idx}: {:+.3}° root {root:.2} L0 {:.1} L1 {:.1} (start {:.1} {:.1})",
+                    (dir * off).to_degrees(),
+                    xf[idx + 2],
+                    xf[idx + 3],
+                    xs[idx + 2],
+                    xs[idx + 3]
+                );
+            }
+            if root >= 1.0 {
+                side = prev_off + (off - prev_off) * (1.0 - prev_root) / (root - prev_root);
+                break;
+            }
+            if off >= PROFILE_SPAN {
+                break;
+            }
+            (prev_off, prev_root) = (off, root);
+            xs = xf;
+            step *= 2.0;
+        }
+        worst = worst.max(side);
+    }
+    worst
 }
 
 /// Cost knobs of [`fit`].
@@ -1146,7 +1268,43 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         1.0 / (s2[2] * corr[2]),
     ];
     let (a, _) = normal_equations(&j, &r, &bounds, &group_cols(cb.0, cb.1), w);
-    let cov = covariance(&a)?;
+    let mut cov = covariance(&a)?;
+    // A sliding parabola's start tangent: the profile of the weighted cost, not its curvature.
+    let model = Model {
+        pb,
+        m1: cb.0,
+        m2: cb.1,
+        use_: use_.clone(),
+    };
+    // A straight path says `delta = theta`; what that is worth is the profile of `delta` in the
+    // richest model, where a curve hidden near the start may still bend it.
+    let mut delta_sd = [None, None];
+    let mut delta_lin = [None, None];
+    for (ball, m) in [(0, cb.0), (1, Some(cb.1))] {
+        let Some(m) = m else { continue };
+        let (mdl, xs, i) = match m {
+            PathModel::ParabolaLine => (&model, &xb, if ball == 0 { 5 } else { model.off2() }),
+            PathModel::Line if full == richest => (
+                &model_full,
+                &x,
+                if ball == 0 { 5 } else { model_full.off2() },
+            ),
+            PathModel::Line => continue,
+        };
+        let lin = if m == PathModel::ParabolaLine {
+            cov[(i, i)]
+        } else {
+            (0.05f64.to_radians()).powi(2)
+        };
+        if lin.is_finite() && lin > 0.0 {
+            let sd = profile_sd(mdl, xs, i, lin.sqrt(), w, settings);
+            if m == PathModel::ParabolaLine {
+                delta_lin[ball] = Some(lin.sqrt());
+                cov[(i, i)] = lin.max(sd * sd);
+            }
+            delta_sd[ball] = Some(sd);
+        }
+    }
     Some(JointFit {
         params: xb,
         cov,
@@ -1156,6 +1314,8 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         s2,
         corr,
         bic,
+        delta_sd,
+        delta_lin,
     })
 }
 
@@ -1461,5 +1621,66 @@ mod tests {
             assert!((f.o().0 - xt[0]).abs() < 0.05 && (f.r() - xt[2]).abs() < 0.05);
             assert!(f.sd(t1).is_finite() && f.sd(t1) > 0.0);
         }
+    }
+
+    /// The profile of a start tangent: where the parabola is well sampled it agrees with the
+    /// linearised sigma (the cost is nearly quadratic); where its curve is hidden (an object
+    /// ball's 3° hook over its first 0.8 R, no sample within 2 R of O, as under the waiting
+    /// disc's keep-out) the walk finds no rise of the cost and reports the angle undetermined.
+    #[test]
+    fn profile_of_a_start_tangent() {
+        let mut rng = Rng(0xfeed_beef_0042);
+        let mut xt = truth(&mut rng);
+        xt[6] = xt[5] + 0.4;
+        xt[7] = 1.5 * xt[2];
+        xt[8] = 1.5 * xt[2];
+        xt[10] = xt[9] - 3f64.to_radians();
+        xt[11] = 0.4 * xt[2];
+        xt[12] = 0.4 * xt[2];
+        let run = |hide: bool, rng: &mut Rng| {
+            let mut pb = problem(&xt, 0.05, rng);
+            for v in [pb.out1.as_mut().unwrap(), &mut pb.out2] {
+                v.truncate(v.len() - 2);
+            }
+            pb.o_meas = (xt[0], xt[1]);
+            pb.r_meas = xt[2];
+            pb.sigma_o = 0.05;
+            pb.sigma_r = 0.05;
+            if hide {
+                let r = xt[2];
+                pb.out2
+                    .retain(|s| (s.x - xt[0]).hypot(s.y - xt[1]) > 2.0 * r);
+            } else {
+                let g2 = PathGeom::new(PathModel::ParabolaLine, (xt[0], xt[1]), xt[3], &xt[9..13]);
+                pb.out2
+                    .extend(samples_along(&g2, 0.8 * xt[2], 40, 0.05, rng));
+            }
+            fit(&pb, &xt, &FitSettings::default()).expect("fit")
+        };
+        let seen = run(false, &mut rng);
+        assert_eq!(seen.m2, PathModel::ParabolaLine);
+        for ball in [0, 1] {
+            let (p, l) = (seen.delta_sd[ball].unwrap(), seen.delta_lin[ball].unwrap());
+            assert!(
+                p > 0.7 * l && p < 1.5 * l,
+                "ball {}: profile {:.4}° against linear {:.4}°",
+                ball + 1,
+                p.to_degrees(),
+                l.to_degrees()
+            );
+        }
+        assert!(seen.delta_sd(2).to_degrees() < 1.0);
+        let hidden = run(true, &mut rng);
+        // Undetermined: the walk reaches its span, or the legs have no information at all.
+        assert!(
+            hidden.delta_sd(2) >= 0.9 * PROFILE_SPAN,
+            "hidden hook: delta2 sigma {:.2}° (profile {:?})",
+            hidden.delta_sd(2).to_degrees(),
+            hidden.delta_sd[1]
+        );
+        assert!(
+            hidden.delta_sd(1).to_degrees() < 0.5,
+            "the cue ball's parabola is in sight"
+        );
     }
 }

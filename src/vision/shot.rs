@@ -911,7 +911,12 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     let mut notes: Vec<String> = Vec::new();
     let mut delta1_from_arc = false;
     let mut angle = |idx: usize, name: &str| -> (Option<f64>, Option<f64>) {
-        let sd = SIGMA_CALIBRATION * fit.sd(idx);
+        let sd = SIGMA_CALIBRATION
+            * match name {
+                "delta1" => fit.delta_sd(1),
+                "delta2" => fit.delta_sd(2),
+                _ => fit.sd(idx),
+            };
         if sd.is_finite() && sd <= unresolved {
             (Some(deg(m * wrap(fit.params[idx]))), Some(deg(sd)))
         } else {
