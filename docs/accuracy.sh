@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Extraction accuracy against ground truth, as quoted in the README: four synthetic sets of 24
-# photos (2400×1600, seed 101), extracted with the default settings, compared with truth.csv.
+# photos (2400×1600, seed 101) and 36 clean mixed-spin shots with a plate (seed 8), extracted
+# with the default settings, compared with truth.csv.
 # Usage: docs/accuracy.sh [WORKDIR]   (needs a release build: cargo build --release)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,12 +11,14 @@ work="${1:-$(mktemp -d)}"
 "$bin" synth --out "$work/clean" --tier clean --shots 24 --seed 101 >/dev/null
 "$bin" synth --out "$work/realistic" --tier realistic --shots 24 --seed 101 >/dev/null
 "$bin" synth --out "$work/hard" --tier hard --shots 24 --seed 101 >/dev/null
+"$bin" synth --out "$work/mixed" --tier clean --shots 36 --seed 8 --spin-modes mixed --background >/dev/null
 args=()
-for set in clean_plate clean realistic hard; do
+for set in clean_plate clean realistic hard mixed; do
+  n=$(find "$work/$set" -name 'shot_*' | wc -l)
   start=$(date +%s.%N)
   "$bin" extract "$work/$set" --out "$work/$set.csv" --jobs 2 || true   # exit 1 when a row is `error`
   end=$(date +%s.%N)
-  echo "$set: $(echo "24 / ($end - $start)" | bc -l | cut -c1-4) images/s on 2 cores (decode included)"
+  echo "$set: $(echo "$n / ($end - $start)" | bc -l | cut -c1-4) images/s on 2 cores (decode included)"
   args+=("$work/$set" "$work/$set.csv")
 done
 python3 docs/compare_truth.py "${args[@]}"
