@@ -471,11 +471,17 @@ mod tests {
             .collect()
     }
 
+    fn unit(v: [f32; 3]) -> [f32; 3] {
+        let n = v.iter().map(|x| x * x).sum::<f32>().sqrt();
+        v.map(|x| x / n)
+    }
+
+    /// The cloth colour of both tests.
+    const CLOTH: [f32; 3] = [0.3, 0.8, 0.52];
+
     #[test]
     fn robust_covariance_recovers_texture_and_noise() {
-        let c = [0.3, 0.8, 0.52];
-        let cn = (c.iter().map(|v| v * v).sum::<f32>()).sqrt();
-        let c = c.map(|v| v / cn);
+        let c = unit(CLOTH);
         let ci = robust_cov_inv(&residuals(c, 40_000));
         let inv = nalgebra::Matrix3::from_fn(|i, j| ci[i][j]);
         let cov = inv.try_inverse().unwrap();
@@ -493,14 +499,10 @@ mod tests {
 
     #[test]
     fn projector_keeps_the_ball_amplitude_and_drops_the_cloth_colour() {
-        let c = [0.3f32, 0.8, 0.52];
-        let cn = (c.iter().map(|v| v * v).sum::<f32>()).sqrt();
-        let c = c.map(|v| v / cn);
+        let c = unit(CLOTH);
         let ci = robust_cov_inv(&residuals(c, 40_000));
         // A white ball on this cloth: ball minus cloth.
-        let u = [0.66f32, 0.45, 0.6];
-        let un = (u.iter().map(|v| v * v).sum::<f32>()).sqrt();
-        let u = u.map(|v| v / un);
+        let u = unit([0.66, 0.45, 0.6]);
         let w = projector(&ci, u);
         assert!((dot(w, u) - 1.0).abs() < 1e-5, "w·u = {}", dot(w, u));
         // The plain projection passes u·c of a blotch; the GLS one
