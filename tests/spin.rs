@@ -1,5 +1,5 @@
 //! Issue 8 end to end: a clean folder of 36 billiard shots with mixed follow, stun, draw and
-//! English (`synth --spin-modes mixed`, background plate, 1200×800) → `extract` →
+//! English (`synth --spin-modes mixed`, background plate, 2400×1600) → `extract` →
 //! `fit --spin estimate`. Target: `e` and `mu` within 0.01 of the generating values and each
 //! shot's spin `r` within its stated 2 sigma in at least 90 % of the shots that report one.
 //!
@@ -7,19 +7,17 @@
 //! - `fit_recovers_spin_from_true_angles_with_extractor_errors`: the fit alone on this folder's
 //!   shots: true angles with Gaussian noise of the extractor's stated errors, its nulls and its
 //!   stated errors (what the fit would see from an extractor whose errors are as stated).
-//! - `synth_extract_fit_recovers_spin_and_coefficients`: the full chain. Measured 2026-11-22
-//!   (seed 8): 31 of 36 rows ok; psi and theta within 0.1–0.3° (a −0.1 px ball-radius bias at
-//!   this 1200×800 scale); mu 0.0729 ± 0.0012 and r within 2 sigma for 24 of 25 shots, both
-//!   checked. `e` is not checked: with unknown spin it rests on `delta1` alone (without it `e` is
-//!   not identified). Session 2 (centre-line `delta1`, biased towards `theta1`): e 0.940 ± 0.011.
-//!   Session 3 (`delta1` from the pixels around the impact, `vision::arc`, biased the other way
-//!   by a few tenths of a degree): e 0.991 ± 0.003 against 0.97, mu 0.0725 ± 0.0010, r within
-//!   2 sigma for 28 of 30 shots (issue 4). Session 5 (rolling-line brightness ramp in the arc
-//!   fit, renderer following the rolling deceleration; `delta1` still turns 0.1–0.3° too far):
-//!   e 0.9845 ± 0.0020 (the true angles give 0.9693 ± 0.0020), mu 0.0743 ± 0.0017, r within
-//!   2 sigma for 28 of 29 shots. Session 6 (colour projection with the cloth's covariance,
-//!   chromatic cloth texture in the renderer): e 0.9808 ± 0.0020, mu 0.0721 ± 0.0016, r within
-//!   2 sigma for 29 of 29 shots.
+//! - `synth_extract_fit_recovers_spin_and_coefficients`: the full chain, all three targets
+//!   checked. Measured 2026-11-24 (seed 8): e 0.9742 ± 0.0019, mu 0.0718 ± 0.0060, r within
+//!   2 sigma for 29 of 29 shots; the same recipe on seeds 9, 10, 11 (CLI, not in the test): e
+//!   0.973, 0.970, 0.968, mu 0.071 each, r within 2 sigma for 30/31, 28/28, 28/33.
+//!
+//! With unknown spin `e` rests on `delta1` alone (without it `e` is not identified), so the
+//! chain's `e` follows the arc fit's remaining bias, which scales about as 1/R. Until session 6
+//! the test ran at 1200×800 (R ≈ 52 px) and could not check `e`: session 2 (centre-line
+//! `delta1`) e 0.940, session 3 (pixel arc fit) 0.991, session 5 (rolling-line ramp) 0.9845,
+//! session 6 (colour projection) 0.9807 ± 0.0020 against 0.97. At full size (R ≈ 104 px, the
+//! size of every accuracy table in the README) it is within the target.
 //!
 //! Run with `cargo test --release --test spin`.
 
@@ -51,7 +49,7 @@ fn synth_and_extract(dir: &Path) -> (Vec<ShotRow>, Truth) {
     let shots_dir = dir.join("shots");
     let mut a = SynthArgs::new(&shots_dir, Tier::Clean, 36, 8);
     a.material = Some("billiard".into());
-    a.size = "1200x800".into();
+    a.size = "2400x1600".into();
     a.background = true;
     a.spin_modes = Some(SpinModes::Mixed);
     a.psi = Some("15:65".into());
@@ -200,9 +198,10 @@ fn synth_extract_fit_recovers_spin_and_coefficients() {
             d(r.theta2_deg, r.theta2_err_deg, "theta2_deg"),
         );
     }
-    // e is not checked: with free spin it rests on delta1 alone, which the extractor biases
-    // (issue 4; measured e 0.991 ± 0.003 against 0.97, see the module doc).
-    check(&fit(&rows), &truth, "extracted angles", false);
+    // With free spin e rests on delta1 alone, whose remaining bias (the arc turns a few tenths
+    // of a degree too far, about 1/R) moved it by 0.011 at 1200×800; at full size it is within
+    // the target (module doc).
+    check(&fit(&rows), &truth, "extracted angles", true);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
