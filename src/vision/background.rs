@@ -158,9 +158,9 @@ const POLY_DEGREE: usize = 4;
 /// hence a singular covariance). Returns its inverse.
 pub fn robust_cov_inv(d: &[[f32; 3]]) -> [[f64; 3]; 3] {
     use nalgebra::{Matrix3, Vector3};
-    let chan = |c: usize| d.iter().map(|v| v[c]).collect::<Vec<f32>>();
-    let med: [f64; 3] = [0, 1, 2].map(|c| median(&mut chan(c)) as f64);
-    let sd: [f64; 3] = [0, 1, 2].map(|c| (mad_sigma(&chan(c)) as f64).max(1e-9));
+    let chans: [Vec<f32>; 3] = [0, 1, 2].map(|c| d.iter().map(|v| v[c]).collect());
+    let med: [f64; 3] = [0, 1, 2].map(|c| median(&mut chans[c].clone()) as f64);
+    let sd: [f64; 3] = [0, 1, 2].map(|c| (mad_sigma(&chans[c]) as f64).max(1e-9));
     let mut inv = Matrix3::from_diagonal(&Vector3::new(
         1.0 / (sd[0] * sd[0]),
         1.0 / (sd[1] * sd[1]),

@@ -455,8 +455,8 @@ pub struct JointFit {
     pub bic: f64,
     /// Profile 1-sigma of each ball's start tangent `delta` (cue ball, object ball), from the
     /// parabola of the chosen model or, for a straight path, of the richest model
-    /// ([`profile_sd`]); `None` where not computed.
-    pub delta_sd: [Option<f64>; 2],
+    /// ([`profile_sd`]); `None` where not computed. [`JointFit::delta_sd`] combines it.
+    pub delta_profile: [Option<f64>; 2],
     /// The linearised 1-sigma of a parabola's `delta` (before the profile widened it).
     pub delta_lin: [Option<f64>; 2],
 }
@@ -514,11 +514,10 @@ impl JointFit {
         let Some((id, it)) = self.angle_indices(ball) else {
             return f64::INFINITY;
         };
-        let prof = self.delta_sd[ball - 1];
         if id != it {
             self.sd(id)
         } else {
-            let p = prof.unwrap_or(0.0);
+            let p = self.delta_profile[ball - 1].unwrap_or(0.0);
             (self.sd(id).powi(2) + p * p).sqrt()
         }
     }
@@ -1065,16 +1064,6 @@ fn profile_sd(
             xs[idx] = d_new;
             let (xf, ev) = lm_pinned(model, &xs, &pinned, Some(idx));
             let root = (wcost(&ev) - c0).max(0.0).sqrt();
-            if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-                eprintln!(
-                    "profile p{idx}: {:+.3}° root {root:.2} L0 {:.1} L1 {:.1} (start {:.1} {:.1})",
-                    (dir * off).to_degrees(),
-                    xf[idx + 2],
-                    xf[idx + 3],
-                    xs[idx + 2],
-                    xs[idx + 3]
-                );
-            }
             if root >= 1.0 {
                 side = prev_off + (off - prev_off) * (1.0 - prev_root) / (root - prev_root);
                 break;
@@ -1278,32 +1267,31 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     };
     // A straight path says `delta = theta`; what that is worth is the profile of `delta` in the
     // richest model, where a curve hidden near the start may still bend it.
-    let mut delta_sd = [None, None];
+    let mut delta_profile = [None, None];
     let mut delta_lin = [None, None];
     for (ball, m) in [(0, cb.0), (1, Some(cb.1))] {
-        let Some(m) = m else { continue };
-        let (mdl, xs, i) = match m {
-            PathModel::ParabolaLine => (&model, &xb, if ball == 0 { 5 } else { model.off2() }),
-            PathModel::Line if full == richest => (
-                &model_full,
-                &x,
-                if ball == 0 { 5 } else { model_full.off2() },
-            ),
-            PathModel::Line => continue,
+        let parabola = match m {
+            Some(PathModel::ParabolaLine) => true,
+            Some(PathModel::Line) if full == richest => false,
+            _ => continue,
         };
-        let lin = if m == PathModel::ParabolaLine {
-            cov[(i, i)]
+        let (mdl, xs) = if parabola {
+            (&model, &xb)
         } else {
-            (0.05f64.to_radians()).powi(2)
+            (&model_full, &x)
         };
-        if lin.is_finite() && lin > 0.0 {
-            let sd = profile_sd(mdl, xs, i, lin.sqrt(), w, settings);
-            if m == PathModel::ParabolaLine {
-                delta_lin[ball] = Some(lin.sqrt());
-                cov[(i, i)] = lin.max(sd * sd);
-            }
-            delta_sd[ball] = Some(sd);
+        let i = if ball == 0 { 5 } else { mdl.off2() };
+        // The walk's first step: the linearised sigma of a parabola (a line has none).
+        let lin = if parabola { cov[(i, i)] } else { 0.0 };
+        if !(lin.is_finite() && (lin > 0.0 || !parabola)) {
+            continue;
         }
+        let sd = profile_sd(mdl, xs, i, lin.sqrt(), w, settings);
+        if parabola {
+            delta_lin[ball] = Some(lin.sqrt());
+            cov[(i, i)] = lin.max(sd * sd);
+        }
+        delta_profile[ball] = Some(sd);
     }
     Some(JointFit {
         params: xb,
@@ -1314,7 +1302,7 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         s2,
         corr,
         bic,
-        delta_sd,
+        delta_profile,
         delta_lin,
     })
 }
@@ -1660,7 +1648,10 @@ mod tests {
         let seen = run(false, &mut rng);
         assert_eq!(seen.m2, PathModel::ParabolaLine);
         for ball in [0, 1] {
-            let (p, l) = (seen.delta_sd[ball].unwrap(), seen.delta_lin[ball].unwrap());
+            let (p, l) = (
+                seen.delta_profile[ball].unwrap(),
+                seen.delta_lin[ball].unwrap(),
+            );
             assert!(
                 p > 0.7 * l && p < 1.5 * l,
                 "ball {}: profile {:.4}° against linear {:.4}°",
@@ -1676,7 +1667,7 @@ mod tests {
             hidden.delta_sd(2) >= 0.9 * PROFILE_SPAN,
             "hidden hook: delta2 sigma {:.2}° (profile {:?})",
             hidden.delta_sd(2).to_degrees(),
-            hidden.delta_sd[1]
+            hidden.delta_profile[1]
         );
         assert!(
             hidden.delta_sd(1).to_degrees() < 0.5,

@@ -910,13 +910,8 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     let unresolved = 10f64.to_radians();
     let mut notes: Vec<String> = Vec::new();
     let mut delta1_from_arc = false;
-    let mut angle = |idx: usize, name: &str| -> (Option<f64>, Option<f64>) {
-        let sd = SIGMA_CALIBRATION
-            * match name {
-                "delta1" => fit.delta_sd(1),
-                "delta2" => fit.delta_sd(2),
-                _ => fit.sd(idx),
-            };
+    let mut angle = |idx: usize, sd: f64, name: &str| -> (Option<f64>, Option<f64>) {
+        let sd = SIGMA_CALIBRATION * sd;
         if sd.is_finite() && sd <= unresolved {
             (Some(deg(m * wrap(fit.params[idx]))), Some(deg(sd)))
         } else {
@@ -928,7 +923,7 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         }
     };
     if let Some((id, it)) = fit.angle_indices(1) {
-        (out.delta1_deg, out.delta1_err_deg) = angle(id, "delta1");
+        (out.delta1_deg, out.delta1_err_deg) = angle(id, fit.delta_sd(1), "delta1");
         // The sliding arc mostly lies where the cue ball's light overlaps the incoming streak:
         // its start tangent comes from the pixels there (the centre-line fit gives the rest).
         let alpha = fit.alpha();
@@ -990,11 +985,11 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
             out.delta1_deg = None;
             out.delta1_err_deg = None;
         }
-        (out.theta1_deg, out.theta1_err_deg) = angle(it, "theta1");
+        (out.theta1_deg, out.theta1_err_deg) = angle(it, fit.sd(it), "theta1");
     }
     let (id, it) = fit.angle_indices(2).expect("object ball always has a path");
-    (out.delta2_deg, out.delta2_err_deg) = angle(id, "delta2");
-    (out.theta2_deg, out.theta2_err_deg) = angle(it, "theta2");
+    (out.delta2_deg, out.delta2_err_deg) = angle(id, fit.delta_sd(2), "delta2");
+    (out.theta2_deg, out.theta2_err_deg) = angle(it, fit.sd(it), "theta2");
     if delta1_from_arc {
         notes.retain(|n| !n.starts_with("delta1"));
     }

@@ -300,8 +300,8 @@ pub struct Profile {
     pub bad: Vec<bool>,
 }
 
-/// Samples the cross-profile through `p` perpendicular to unit `d` over `±1.7 R`; `None` when the
-/// core is cut by the image border.
+/// Samples the cross-profile through `p` perpendicular to unit `d` over `±1.7 R`, of the signal
+/// projected on `w` (a [`Signal::projector`]); `None` when the core is cut by the image border.
 pub fn sample_profile(
     sig: &Signal,
     p: (f64, f64),
@@ -309,9 +309,8 @@ pub fn sample_profile(
     r: f64,
     step: f64,
     excl: Option<&Exclusion>,
-    u: [f32; 3],
+    w: [f32; 3],
 ) -> Option<Profile> {
-    let u = sig.projector(u);
     let n = (-d.1, d.0);
     let half = (1.7 * r).ceil() as i64;
     let n_a = sub_steps(step);
@@ -325,7 +324,7 @@ pub fn sample_profile(
             let a = (j as f64 + 0.5) / n_a as f64 * step - step / 2.0;
             let x = p.0 + a * d.0 + tk * n.0;
             let y = p.1 + a * d.1 + tk * n.1;
-            match sig.sample_u(x, y, u) {
+            match sig.sample_u(x, y, w) {
                 Some(v) => acc += v,
                 None => {
                     inside = false;
@@ -356,7 +355,7 @@ pub fn sample_profile(
 }
 
 /// Measures the streak centre on the line through `p` perpendicular to unit `d` (symmetric
-/// centroid with a baseline from the flanks).
+/// centroid with a baseline from the flanks), in the signal projected on `w`.
 pub fn profile_centre(
     sig: &Signal,
     p: (f64, f64),
@@ -364,9 +363,9 @@ pub fn profile_centre(
     r: f64,
     step: f64,
     excl: Option<&Exclusion>,
-    u: [f32; 3],
+    w: [f32; 3],
 ) -> Option<ProfileCentre> {
-    let pr = sample_profile(sig, p, d, r, step, excl, u)?;
+    let pr = sample_profile(sig, p, d, r, step, excl, w)?;
     let n_a = sub_steps(step);
     centroid(&pr, r, n_a)
 }
@@ -706,8 +705,8 @@ pub struct KeepOut {
     pub radius: f64,
 }
 
-/// Tracks a streak from `seed` along `dir` (and backwards towards the disc), returning the
-/// centre-line samples ordered from the disc end outward.
+/// Tracks a streak of colour `u` from `seed` along `dir` (and backwards towards the disc),
+/// returning the centre-line samples ordered from the disc end outward.
 pub fn track(
     sig: &Signal,
     seed: (f64, f64),
@@ -718,6 +717,7 @@ pub fn track(
     u: [f32; 3],
 ) -> Vec<Sample> {
     let step = (r * step_r).max(2.0);
+    let w = sig.projector(u);
     // A streak that leaves the frame early (the impact near an edge) can have its seed where the
     // cross-profile is already cut by the border: then start again nearer the disc.
     for k in 0..=4 {
@@ -726,8 +726,8 @@ pub fn track(
         if k > 0 && (s.0 - keep_out.ox).hypot(s.1 - keep_out.oy) < keep_out.radius + r {
             break;
         }
-        let outward = walk(sig, s, dir, r, step, keep_out, u);
-        let inward = walk(sig, s, (-dir.0, -dir.1), r, step, keep_out, u);
+        let outward = walk(sig, s, dir, r, step, keep_out, w);
+        let inward = walk(sig, s, (-dir.0, -dir.1), r, step, keep_out, w);
         if outward.is_empty() && inward.is_empty() {
             continue;
         }
@@ -745,7 +745,7 @@ fn walk(
     r: f64,
     step: f64,
     ko: KeepOut,
-    u: [f32; 3],
+    w: [f32; 3],
 ) -> Vec<Sample> {
     let mut out: Vec<Sample> = Vec::new();
     let mut p = seed;
@@ -776,7 +776,7 @@ fn walk(
             }
             break;
         }
-        let Some(pc) = profile_centre(sig, p, d, r, step, None, u) else {
+        let Some(pc) = profile_centre(sig, p, d, r, step, None, w) else {
             break;
         };
         let snr = pc.amp / (pc.noise / pc.n_core.sqrt());
@@ -879,7 +879,8 @@ impl Exclusion {
 type Measured = ((f64, f64), (f64, f64), Profile, ProfileCentre);
 
 /// Re-measures a streak's centre-line at its samples with other balls' light excluded, and
-/// extends it towards `start` (the impact or the disc) while the core stays clean. Centroids
+/// extends it towards `start` (the impact or the disc) while the core stays clean; `u` is the
+/// streak's colour. Centroids
 /// first; then two rounds of the streak's own [`Template`] fitted to every profile.
 pub fn remeasure(
     sig: &Signal,
@@ -891,6 +892,7 @@ pub fn remeasure(
     u: [f32; 3],
 ) -> Vec<Sample> {
     let step = (r * step_r).max(2.0);
+    let u = sig.projector(u);
     let n_a = sub_steps(step);
     let n = samples.len();
     let dir_at = |i: usize| {
