@@ -549,6 +549,70 @@ fn disc_at(sig: &Signal, p: (f64, f64), r: f64, contrast: f64, ring_level: f64) 
     n > 0.0 && acc / n - ring_level > contrast / 3.0
 }
 
+/// Edge of a ball resting at `p`: mean signal on the ring `R/2` from `p` minus that on the ring
+/// `1.2 R` out (just beyond a resting ball's rim). A resting ball gives most of the disc contrast
+/// (0.5–1.3 of it on clean synthetic head-on stun shots); light that only passes through `p` (a
+/// hidden path, streaks overlapping near the impact) gives little (−0.05 to 0.35), as the
+/// streaks cross both rings.
+fn rim_at(sig: &Signal, p: (f64, f64), r: f64) -> f64 {
+    let ring = |rho: f64| {
+        let v: Vec<f64> = (0..72)
+            .filter_map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 72.0;
+                sig.sample(p.0 + rho * a.cos(), p.1 + rho * a.sin())
+                    .map(f64::from)
+            })
+            .collect();
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    };
+    ring(0.5 * r) - ring(1.2 * r)
+}
+
+/// Relative brightening per ball radius of a streak away from its start `s`, from its samples
+/// between 1.5 R and 6 R: `b / a` of the least-squares line `amp = a + b d / R`. The signal is
+/// the dwell time, so a ball slowing down brightens: an object ball leaves sliding (no spin)
+/// and loses 2/7 of its speed within a few radii (+5 to +15 % per R); a cue ball arriving
+/// rolls at nearly constant speed, or arrives sliding and so brightens towards `P` (≤ 0 here).
+fn time_arrow(samples: &[Sample], s: (f64, f64), r: f64) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = samples
+        .iter()
+        .map(|q| ((q.x - s.0).hypot(q.y - s.1) / r, q.amp))
+        .filter(|(d, _)| (1.5..=6.0).contains(d))
+        .collect();
+    if pts.len() < 5 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = pts
+        .iter()
+        .fold((0.0, 0.0), |acc, p| (acc.0 + p.0 / n, acc.1 + p.1 / n));
+    let (sxx, sxy) = pts.iter().fold((0.0, 0.0), |acc, p| {
+        (acc.0 + (p.0 - mx).powi(2), acc.1 + (p.0 - mx) * (p.1 - my))
+    });
+    let b = sxy / sxx.max(1e-12);
+    let a = my - b * mx;
+    (a.abs() > 1e-12).then(|| b / a.abs())
+}
+
+/// Fraction of the object disc's contrast that [`rim_at`] must reach for a ball at rest at P.
+const REST_RIM: f64 = 0.45;
+
+/// Largest impact angle (degrees) at which a cue ball can stop at P: after an oblique impact
+/// it keeps its tangential speed `v sin psi`, and even at 3° (5 % of `v`) it rolls on for most
+/// of a ball diameter per 0.1 s.
+const STOP_PSI_MAX_DEG: f64 = 3.0;
+
+/// Smallest impact angle (degrees) at which a cue-ball path that was not found cannot bias the
+/// other two: below it a follow shot runs along the object ball's streak and a draw shot back
+/// along the incoming one (within 2R over a few radii), and both readings were wrong by 1–10°
+/// with stated errors of hundredths (clean synthetic shots at psi < 10°, follow and draw).
+const HIDDEN_PATH_PSI_MIN_DEG: f64 = 12.0;
+
+/// Largest `|theta2|` (degrees) of an object ball: its direction from the line of centres is
+/// the friction throw, `tan |delta2| <= mu` (and far less when the contact sticks); 35° would
+/// need `mu = 0.7` at full slip.
+const OBJECT_THROW_MAX_DEG: f64 = 35.0;
+
 /// Factor on the path fit's standard errors. The covariance counts correlated centre-line
 /// samples through their measured autocorrelation, but errors shared by a whole streak (cloth
 /// blotches at the scale of the ball, the impact point's offset, lens distortion) are
@@ -582,6 +646,17 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         Ok(d) => d,
         Err(e) => return Analysis::declined(Status::Declined, e),
     };
+    read_from_disc(&sig, dsc, opts, false)
+}
+
+/// The scene read around the object ball's disc `dsc`. `second_disc` is set when this disc was
+/// taken from a ball resting at the first reading's impact point (see [`time_arrow`]).
+fn read_from_disc(
+    sig: &Signal,
+    dsc: disc::Disc,
+    opts: &AnalysisOptions,
+    second_disc: bool,
+) -> Analysis {
     let mut out = Analysis::declined(Status::Declined, "");
     out.ball_radius_px = Some(dsc.r);
     let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
@@ -720,8 +795,11 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
             return out;
         }
     };
+    // Only two streaks: the cue ball's own path after the impact is missing. Either it stopped
+    // (a ball rests at P) or its path is hidden along the other streaks; without light at P
+    // neither reading holds.
+    let mut cue_at_rest = false;
     if cue_stopped {
-        // Only two streaks: accept "cue ball stopped" only if a stationary ball sits at P.
         let x0 = &reading.x0;
         let p = (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin());
         let ring = {
@@ -738,6 +816,13 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
                           ball's path is hidden"
                 .into();
             return out;
+        }
+        cue_at_rest = rim_at(&sig, p, r) >= REST_RIM * dsc.contrast;
+        if debug {
+            eprintln!(
+                "two streaks: rim at P {:.3} of the disc contrast",
+                rim_at(&sig, p, r) / dsc.contrast
+            );
         }
     }
     for (i, s) in out.streaks.iter_mut().enumerate() {
@@ -788,6 +873,45 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     }
     for (i, s) in out.streaks.iter_mut().enumerate() {
         s.1 = measured[i].clone();
+    }
+    // A cue ball resting against the object ball: a white cue ball is the brighter disc, and
+    // the light alone is symmetric in time (a ball arrives and stops, the other leaves), except
+    // that the object ball leaves sliding and so brightens away from its disc.
+    if cue_at_rest {
+        let obj = time_arrow(&measured[reading.b2], o, r);
+        let inc = time_arrow(&measured[reading.inc], p_imp, r);
+        if debug {
+            eprintln!("time arrow: object {obj:?} incoming {inc:?}");
+        }
+        if let (Some(obj), Some(inc)) = (obj, inc)
+            && obj < inc
+        {
+            if second_disc {
+                out.reason = "cannot tell which resting ball is the object ball (neither \
+                              reading has the object ball slowing down away from its disc)"
+                    .into();
+                return out;
+            }
+            let c = disc::CoarseDisc {
+                cx: p_imp.0,
+                cy: p_imp.1,
+                r,
+                level: dsc.contrast as f32,
+                elongation: 1.0,
+            };
+            return match disc::refine(sig, &c) {
+                Ok(d) if (d.cx - p_imp.0).hypot(d.cy - p_imp.1) < 0.5 * r => {
+                    read_from_disc(sig, d, opts, true)
+                }
+                _ => {
+                    out.reason = "the streak read as the object ball's does not slow down away \
+                                  from its disc, and no resting ball was found at the impact \
+                                  point to swap roles with"
+                        .into();
+                    out
+                }
+            };
+        }
     }
     let pb = Problem {
         o_meas: o,
@@ -905,6 +1029,31 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
         out.fit = Some(fit);
         return out;
     }
+    // Two streaks only: which story the light tells must agree with the impact angle.
+    if cue_stopped {
+        let psi_deg = deg(psi_s.abs());
+        let refuse = if cue_at_rest && psi_deg > STOP_PSI_MAX_DEG {
+            Some(format!(
+                "a ball rests at the impact point although psi = {psi_deg:.1}° (a cue ball \
+                 stops only after a head-on stun shot): the resting balls are probably \
+                 misread (which one is the object ball?)"
+            ))
+        } else if !cue_at_rest && psi_deg < HIDDEN_PATH_PSI_MIN_DEG {
+            Some(format!(
+                "near head-on shot (psi = {psi_deg:.1}°) and the cue ball's path not found: it \
+                 runs along the object ball's streak (follow) or back along the incoming one \
+                 (draw) and biases both"
+            ))
+        } else {
+            None
+        };
+        if let Some(reason) = refuse {
+            out.status = Status::Declined;
+            out.reason = reason;
+            out.fit = Some(fit);
+            return out;
+        }
+    }
     // An angle whose fit uncertainty exceeds this is not measured (the sliding arc is hidden
     // where the streaks overlap near the impact): it is reported as undefined, with the reason.
     let unresolved = 10f64.to_radians();
@@ -990,6 +1139,17 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     let (id, it) = fit.angle_indices(2).expect("object ball always has a path");
     (out.delta2_deg, out.delta2_err_deg) = angle(id, fit.delta_sd(2), "delta2");
     (out.theta2_deg, out.theta2_err_deg) = angle(it, fit.sd(it), "theta2");
+    if let Some(t2) = out.theta2_deg
+        && t2.abs() > OBJECT_THROW_MAX_DEG
+    {
+        out.status = Status::Declined;
+        out.reason = format!(
+            "the object ball's path leaves {t2:.0}° from the line of centres (a friction throw \
+             is at most {OBJECT_THROW_MAX_DEG:.0}°): the streaks are misread"
+        );
+        out.fit = Some(fit);
+        return out;
+    }
     if delta1_from_arc {
         notes.retain(|n| !n.starts_with("delta1"));
     }
@@ -1003,7 +1163,12 @@ pub fn analyse(img: &RgbImage, plate: Option<&RgbImage>, opts: &AnalysisOptions)
     if fit.m1.is_none() {
         notes.insert(
             0,
-            "cue ball stops at the impact: delta1, theta1 undefined".into(),
+            if cue_at_rest {
+                "cue ball stops at the impact: delta1, theta1 undefined"
+            } else {
+                "cue ball's path not found (hidden near the impact): delta1, theta1 undefined"
+            }
+            .into(),
         );
     }
     out.reason = notes.join("; ");
