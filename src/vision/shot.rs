@@ -551,9 +551,9 @@ fn disc_at(sig: &Signal, p: (f64, f64), r: f64, contrast: f64, ring_level: f64) 
 
 /// Edge of a ball resting at `p`: mean signal on the ring `R/2` from `p` minus that on the ring
 /// `1.2 R` out (just beyond a resting ball's rim). A resting ball gives most of the disc contrast
-/// (0.5–1.3 of it on clean synthetic head-on stun shots); light that only passes through `p` (a
-/// hidden path, streaks overlapping near the impact) gives little (−0.05 to 0.35), as the
-/// streaks cross both rings.
+/// (0.5–1.3 of it on clean synthetic head-on stun shots, 0.38 for a slow cue ball come to rest
+/// near P); light that only passes through `p` (a hidden path, streaks overlapping near the
+/// impact) gives little (−0.05 to 0.26; one of 0.35), as the streaks cross both rings.
 fn rim_at(sig: &Signal, p: (f64, f64), r: f64) -> f64 {
     let ring = |rho: f64| {
         let v: Vec<f64> = (0..72)
@@ -595,7 +595,7 @@ fn time_arrow(samples: &[Sample], s: (f64, f64), r: f64) -> Option<f64> {
 }
 
 /// Fraction of the object disc's contrast that [`rim_at`] must reach for a ball at rest at P.
-const REST_RIM: f64 = 0.45;
+const REST_RIM: f64 = 0.3;
 
 /// Largest impact angle (degrees) at which a cue ball can stop at P: after an oblique impact
 /// it keeps its tangential speed `v sin psi`, and even at 3° (5 % of `v`) it rolls on for most
