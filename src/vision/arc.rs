@@ -476,12 +476,11 @@ impl Pixels {
         // addition as a full accumulation, so the same sums to the last bit.
         let mut acc = mask.ata;
         let mut atb = mask.atb;
-        for i in 0..self.q.len() {
-            if !mask.keep[i] {
+        for (((&o, fixed), &v), &k) in out.iter().zip(&self.fixed).zip(&self.v).zip(&mask.keep) {
+            if !k {
                 continue;
             }
-            let row = columns(out[i], &self.fixed[i]);
-            let v = self.v[i];
+            let row = columns(o, fixed);
             for a in 0..NVAR {
                 atb[a] += row[a] * v;
                 let ra = row[a];
@@ -524,12 +523,10 @@ impl Mask {
     fn new(px: &Pixels, keep: Vec<bool>) -> Mask {
         let mut ata = [[0.0f64; NLIN]; NLIN];
         let mut atb = [0.0f64; NLIN];
-        for i in 0..px.q.len() {
-            if !keep[i] {
+        for ((fixed, &v), &k) in px.fixed.iter().zip(&px.v).zip(&keep) {
+            if !k {
                 continue;
             }
-            let fixed = &px.fixed[i];
-            let v = px.v[i];
             for a in NVAR..NLIN {
                 let ra = fixed[a - NVAR];
                 atb[a] += ra * v;
@@ -737,7 +734,7 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
     if n <= np + 10 {
         return None;
     }
-    let s2 = cost(&res, &keep) / (n - np) as f64;
+    let s2 = cost(&res, keep) / (n - np) as f64;
     let mut jtj = DMatrix::<f64>::zeros(np, np);
     let mut dcols: [Vec<Dwell>; 3] = Default::default();
     for (k, col) in dcols.iter_mut().enumerate() {
@@ -767,12 +764,12 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
     }
     let scale = symmetrise_and_scale(&mut jtj);
     let cov = jtj.try_inverse()?;
-    let var = s2 * correlation_factor(&px, &res, &keep, g.r) * cov[(0, 0)] / (scale[0] * scale[0]);
+    let var = s2 * correlation_factor(&px, &res, keep, g.r) * cov[(0, 0)] / (scale[0] * scale[0]);
     if !(var.is_finite() && var > 0.0) {
         return None;
     }
     if let Some(path) = std::env::var_os("STREAKFIT_ARC_DUMP") {
-        dump(&px, &res, &keep, std::path::Path::new(&path));
+        dump(&px, &res, keep, std::path::Path::new(&path));
     }
     Some(ArcFit {
         delta: x[0],

@@ -661,7 +661,7 @@ fn read_from_disc(
     out.ball_radius_px = Some(dsc.r);
     let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
     out.disc = Some(dsc.clone());
-    let cands = streak::find_coarse(&sig, o.0, o.1, r);
+    let cands = streak::find_coarse(sig, o.0, o.1, r);
     let ko = KeepOut {
         ox: o.0,
         oy: o.1,
@@ -672,7 +672,7 @@ fn read_from_disc(
         .iter()
         .take(4)
         .map(|c| {
-            let t = streak::track(&sig, c.seed, c.dir, r, opts.sample_step_r, ko, c.u);
+            let t = streak::track(sig, c.seed, c.dir, r, opts.sample_step_r, ko, c.u);
             if debug {
                 eprintln!(
                     "candidate seed=({:.0},{:.0}) dir=({:.3},{:.3}) weight={:.3} samples={} u={:?}",
@@ -780,7 +780,7 @@ fn read_from_disc(
         _ => false,
     };
     // Colour likeness of each streak to the waiting disc (the object ball paints both).
-    let disc_u = disc_colour(&sig, o, r);
+    let disc_u = disc_colour(sig, o, r);
     let likeness: Vec<f64> = colours
         .iter()
         .map(|u| (0..3).map(|c| (u[c] * disc_u[c]) as f64).sum())
@@ -811,17 +811,17 @@ fn read_from_disc(
                 .collect();
             background::median(&mut v) as f64
         };
-        if !disc_at(&sig, p, r, dsc.contrast, ring) {
+        if !disc_at(sig, p, r, dsc.contrast, ring) {
             out.reason = "only two streaks and no ball at rest at the impact point: the cue \
                           ball's path is hidden"
                 .into();
             return out;
         }
-        cue_at_rest = rim_at(&sig, p, r) >= REST_RIM * dsc.contrast;
+        cue_at_rest = rim_at(sig, p, r) >= REST_RIM * dsc.contrast;
         if debug {
             eprintln!(
                 "two streaks: rim at P {:.3} of the disc contrast",
-                rim_at(&sig, p, r) / dsc.contrast
+                rim_at(sig, p, r) / dsc.contrast
             );
         }
     }
@@ -859,7 +859,7 @@ fn read_from_disc(
             ex.add_band(&pts, 1.1 * r + 1.5, r);
         }
         let m = streak::remeasure(
-            &sig,
+            sig,
             &raw[a],
             start_of(a),
             r,
@@ -1099,7 +1099,7 @@ fn read_from_disc(
             .as_ref()
             .and_then(|v| v.iter().map(|q| along((q.x, q.y))).reduce(f64::min));
         let measured = (opts.arc_pixels && opts.path_models == PathModels::Auto)
-            .then(|| arc::fit(&sig, cue_u, &geometry))
+            .then(|| arc::fit(sig, cue_u, &geometry))
             .flatten()
             .filter(|a| {
                 let end = along(a.end);
