@@ -6,7 +6,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::PathBuf;
 use streakfit::synth::{SynthArgs, Tier};
-use streakfit::vision::{AnalysisOptions, analyse, image_io};
+use streakfit::vision::{AnalysisOptions, Cloth, analyse, image_io};
 
 fn make(tier: Tier, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("streakfit_bench_{name}"));
@@ -37,7 +37,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| black_box(image_io::load(&path).unwrap()))
         });
         g.bench_function("analyse", |b| {
-            b.iter(|| black_box(analyse(&img, None, &opts)))
+            b.iter(|| black_box(analyse(&img, Cloth::Surface, &opts)))
         });
         g.finish();
     }

@@ -278,12 +278,16 @@ fn pinned_set(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<PathBuf
 /// Extraction stage: every setting of [`extract_settings`] on the pinned set, one thread,
 /// decode excluded; errors pooled over `psi, delta1, delta2, theta1, theta2` of `ok` rows.
 pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<Vec<BenchRow>> {
-    use crate::vision::{analyse, image_io};
+    use crate::vision::{Cloth, analyse, image_io};
     let dir = pinned_set(out, shots, seed, tier)?;
     let truth_text = std::fs::read_to_string(dir.join("truth.csv"))?;
     let truth =
         crate::synth::truth::read_csv(&truth_text).map_err(|e| anyhow!("truth.csv: {e}"))?;
     let jobs = crate::extract::list_jobs(std::slice::from_ref(&dir)).map_err(|e| anyhow!("{e}"))?;
+    // As `extract` does: the folder's cloth texture for photos without a plate (estimated once
+    // per folder, outside the per-image times).
+    let side = crate::vision::AnalysisOptions::default().coarse_side;
+    let textures = crate::extract::folder_textures(&jobs, &jobs, side, false);
     let mut images = Vec::new();
     for j in &jobs {
         let img = image_io::load(&j.path).map_err(|e| anyhow!("{}: {e}", j.path.display()))?;
@@ -291,11 +295,17 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             Some(p) => Some(image_io::load(p).map_err(|e| anyhow!("{}: {e}", p.display()))?),
             None => None,
         };
+        let texture = j
+            .path
+            .parent()
+            .and_then(|d| textures.get(d))
+            .filter(|_| plate.is_none())
+            .cloned();
         let t = truth
             .iter()
             .find(|r| r.get("file") == Some(&j.file))
             .ok_or_else(|| anyhow!("{} has no truth row", j.file))?;
-        images.push((img, plate, t));
+        images.push((img, plate, texture, t));
     }
     let angle = |a: f64, b: f64| ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs();
     let mut rows = Vec::new();
@@ -307,14 +317,19 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
     }
     for (name, opts, is_default) in settings {
         let (mut errs, mut ok, mut secs) = (Vec::new(), 0usize, 0.0);
-        for (img, plate, t) in &images {
+        for (img, plate, texture, t) in &images {
             // Best of three runs: other load on the machine only ever adds time; the analysis
             // is deterministic, so every run gives the same numbers.
             let mut best = f64::INFINITY;
             let mut a = None;
             for _ in 0..3 {
                 let start = Instant::now();
-                let r = analyse(img, plate.as_ref(), &opts);
+                let cloth = match (plate, texture) {
+                    (Some(p), _) => Cloth::Plate(p),
+                    (None, Some(t)) => Cloth::Texture(t),
+                    (None, None) => Cloth::Surface,
+                };
+                let r = analyse(img, cloth, &opts);
                 best = best.min(start.elapsed().as_secs_f64());
                 a = Some(r);
             }

@@ -5,7 +5,9 @@
 //! exactly one row, in sorted order: `ok`, `declined` (no collision, one ball only, saturated,
 //! ambiguous) or `error` (empty, corrupt, unreadable, too small) with a reason; the batch always
 //! goes on (a panic in the analysis of one image becomes that image's `error` row). A plate named
-//! by `scene.toml` (`background`) is the cloth model for the images that name it, not a shot.
+//! by `scene.toml` (`background`) is the cloth model for the images that name it, not a shot;
+//! photos without a plate get their folder's fixed cloth texture, estimated from up to 15 of its
+//! photos ([`folder_textures`]; `--no-texture` turns this off).
 //! `--shard K/N` (1 ≤ K ≤ N) keeps the images whose index `i` in the sorted list of all images
 //! satisfies `i mod N = K - 1`, so the shard tables of an array job concatenate into the full one.
 //! Images are analysed in parallel (rayon, `--jobs` threads); a progress bar is drawn only when
@@ -16,14 +18,15 @@ use crate::cli::{CliError, CliResult, Outcome};
 use crate::scene::{ImageScene, SceneConfig};
 use crate::table::{ShotRow, Status, TableFormat, write_angle_table};
 use crate::vision::{
-    AnalysisOptions, analyse,
+    AnalysisOptions, Cloth, analyse,
     image_io::{self, RgbImage},
     overlay,
+    texture::{self, ClothTexture},
 };
 use anyhow::Context;
 use clap::Args;
 use rayon::prelude::*;
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -46,6 +49,10 @@ pub struct ExtractArgs {
     /// Process only shard K of N (1-based): every N-th image starting with the K-th.
     #[arg(long)]
     pub shard: Option<String>,
+    /// Do not estimate the cloth's fixed texture from the folder's own photos (used by default
+    /// for photos without a plate, in folders of at least 6 photos of one size).
+    #[arg(long)]
+    pub no_texture: bool,
 }
 
 /// One image to analyse.
@@ -151,10 +158,88 @@ pub fn list_jobs(dirs: &[PathBuf]) -> Result<Vec<Job>, CliError> {
     Ok(jobs)
 }
 
-/// Analyses one image into its row (and its overlay, when asked).
+/// The folder a job's photo is in (the key of its cloth texture).
+fn folder_of(job: &Job) -> PathBuf {
+    job.path.parent().unwrap_or(Path::new(".")).to_path_buf()
+}
+
+/// The fixed cloth texture ([`crate::vision::texture`]) of every folder that `wanted` has photos
+/// without a plate in, estimated from the folder's photos in `all` (the whole sorted list, so
+/// that every shard of an array job uses the same texture). A folder too small, or whose photos
+/// cannot be read, gets none (said on stderr when `verbose`).
+pub fn folder_textures(
+    all: &[Job],
+    wanted: &[Job],
+    coarse_side: usize,
+    verbose: bool,
+) -> HashMap<PathBuf, Arc<ClothTexture>> {
+    let needed: BTreeSet<PathBuf> = wanted
+        .iter()
+        .filter(|j| j.plate.is_none())
+        .map(folder_of)
+        .collect();
+    let mut by_dir: BTreeMap<PathBuf, Vec<&Job>> = BTreeMap::new();
+    for j in all.iter().filter(|j| j.plate.is_none()) {
+        by_dir.entry(folder_of(j)).or_default().push(j);
+    }
+    let mut out = HashMap::new();
+    for (dir, js) in by_dir.into_iter().filter(|(d, _)| needed.contains(d)) {
+        if js.len() < texture::MIN_IMAGES {
+            continue;
+        }
+        let res: Vec<texture::Residual> = texture::pick(js.len())
+            .par_iter()
+            .filter_map(|&i| image_io::load(&js[i].path).ok())
+            .map(|img| texture::residual(&img, coarse_side))
+            .collect();
+        // Photos of the folder's most common size only.
+        let mut sizes: HashMap<(usize, usize), usize> = HashMap::new();
+        for r in &res {
+            *sizes.entry(r.size()).or_default() += 1;
+        }
+        let common = sizes
+            .into_iter()
+            .max_by_key(|&(s, n)| (n, s))
+            .map(|(s, _)| s);
+        let res: Vec<texture::Residual> = res
+            .into_iter()
+            .filter(|r| Some(r.size()) == common)
+            .collect();
+        match ClothTexture::from_residuals(&res) {
+            Ok(t) => {
+                if let Ok(path) = std::env::var("STREAKFIT_TEXTURE_PNG") {
+                    let img = image::GrayImage::from_fn(t.tw as u32, t.th as u32, |x, y| {
+                        let v = t.t[y as usize * t.tw + x as usize];
+                        let s = v[0] + v[1] + v[2];
+                        image::Luma([(128.0 + 2000.0 * s).clamp(0.0, 255.0) as u8])
+                    });
+                    let _ = img.save(path);
+                }
+                if verbose {
+                    eprintln!(
+                        "extract: cloth texture of '{}' from {} photos ({:.0}% of the table)",
+                        dir.display(),
+                        t.images,
+                        100.0 * t.coverage
+                    );
+                }
+                out.insert(dir, Arc::new(t));
+            }
+            Err(e) if verbose => {
+                eprintln!("extract: no cloth texture for '{}': {e}", dir.display())
+            }
+            Err(_) => {}
+        }
+    }
+    out
+}
+
+/// Analyses one image into its row (and its overlay, when asked). Without a plate, `texture` is
+/// the folder's cloth texture, if any.
 pub fn process(
     job: &Job,
     plate: Option<&Result<Arc<RgbImage>, String>>,
+    texture: Option<&ClothTexture>,
     overlays: Option<&Path>,
     opts: &AnalysisOptions,
 ) -> ShotRow {
@@ -173,8 +258,8 @@ pub fn process(
                     r.seconds = t0.elapsed().as_secs_f64();
                     return r;
                 }
-                Some(Ok(p)) => Some(p.as_ref()),
-                None => None,
+                Some(Ok(p)) => Cloth::Plate(p.as_ref()),
+                None => texture.map_or(Cloth::Surface, Cloth::Texture),
             };
             let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 analyse(&img, plate_img, opts)
@@ -200,6 +285,7 @@ pub fn process(
                     row.theta2_err_deg = a.theta2_err_deg;
                     row.path_model1 = a.path_model1.clone();
                     row.path_model2 = a.path_model2.clone();
+                    row.cloth_model = a.cloth.map(|c| c.as_str().to_string());
                     row.ball_radius_px = a.ball_radius_px;
                     row.impact_x_px = a.impact.map(|p| p.0);
                     row.impact_y_px = a.impact.map(|p| p.1);
@@ -256,15 +342,16 @@ pub fn run(args: &ExtractArgs) -> CliResult {
     if args.jobs == Some(0) {
         return Err(CliError::usage("--jobs: must be at least 1"));
     }
-    let mut jobs = list_jobs(&args.dirs)?;
-    if let Some((k, n)) = shard {
-        jobs = jobs
-            .into_iter()
+    let all_jobs = list_jobs(&args.dirs)?;
+    let jobs: Vec<Job> = match shard {
+        Some((k, n)) => all_jobs
+            .iter()
             .enumerate()
             .filter(|(i, _)| i % n == k - 1)
-            .map(|(_, j)| j)
-            .collect();
-    }
+            .map(|(_, j)| j.clone())
+            .collect(),
+        None => all_jobs.clone(),
+    };
     if let Some(dir) = &args.overlays {
         std::fs::create_dir_all(dir).map_err(|e| {
             CliError::usage(format!(
@@ -302,12 +389,18 @@ pub fn run(args: &ExtractArgs) -> CliResult {
         indicatif::ProgressBar::hidden()
     };
     let opts = AnalysisOptions::default();
+    let textures = if args.no_texture {
+        HashMap::new()
+    } else {
+        pool.install(|| folder_textures(&all_jobs, &jobs, opts.coarse_side, true))
+    };
     let rows: Vec<ShotRow> = pool.install(|| {
         jobs.par_iter()
             .map(|j| {
                 let row = process(
                     j,
                     j.plate.as_ref().and_then(|p| plates.get(p)),
+                    textures.get(&folder_of(j)).map(|t| t.as_ref()),
                     args.overlays.as_deref(),
                     &opts,
                 );

@@ -860,6 +860,7 @@ pub fn run_pipeline(path: &Path, force: bool) -> Result<RunSummary, CliError> {
             overlays: overlays.clone(),
             jobs: p.extract.jobs,
             shard: None,
+            no_texture: false,
         };
         let table2 = table.clone();
         let work_dir = p.work_dir.clone();

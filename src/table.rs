@@ -2,7 +2,10 @@
 //!
 //! The angles table has one row per input image: `file, status (ok|declined|error), reason,
 //! material, psi_deg, delta1_deg, delta2_deg, theta1_deg, theta2_deg, *_err_deg (1 sigma),
-//! path_model1, path_model2, ball_radius_px, impact_x_px, impact_y_px, spin, english, seconds`.
+//! path_model1, path_model2, cloth_model, ball_radius_px, impact_x_px, impact_y_px, spin, english,
+//! seconds`. `cloth_model` says what the cloth was modelled from: `plate` (an empty-table photo),
+//! `texture` (the folder's fixed cloth texture on the photo's own surface) or `surface` (the
+//! photo's own smooth surface only); null when the photo never got that far.
 //! Undefined angles (a ball that stops) are nulls, never numbers.
 
 use serde::{Deserialize, Serialize};
@@ -47,6 +50,8 @@ pub struct ShotRow {
     /// Path model used per outgoing ball: `line` or `parabola+line`.
     pub path_model1: Option<String>,
     pub path_model2: Option<String>,
+    /// Cloth model of the analysis: `plate`, `texture` or `surface`.
+    pub cloth_model: Option<String>,
     pub ball_radius_px: Option<f64>,
     pub impact_x_px: Option<f64>,
     pub impact_y_px: Option<f64>,
@@ -82,6 +87,7 @@ impl ShotRow {
             theta2_err_deg: None,
             path_model1: None,
             path_model2: None,
+            cloth_model: None,
             ball_radius_px: None,
             impact_x_px: None,
             impact_y_px: None,
@@ -195,6 +201,10 @@ pub fn angle_table_frame(rows: &[ShotRow]) -> Result<DataFrame> {
     cols.push(Column::new(
         "path_model2".into(),
         strings(&|r| r.path_model2.clone()),
+    ));
+    cols.push(Column::new(
+        "cloth_model".into(),
+        strings(&|r| r.cloth_model.clone()),
     ));
     Ok(DataFrame::new(rows.len(), cols)?)
 }
@@ -334,6 +344,7 @@ pub fn rows_from_frame(df: &DataFrame) -> Result<Vec<ShotRow>> {
     let material = strings("material")?;
     let pm1 = strings("path_model1")?;
     let pm2 = strings("path_model2")?;
+    let cloth = strings("cloth_model")?;
     let mut f: std::collections::HashMap<&str, Vec<Option<f64>>> = Default::default();
     for name in FLOAT_COLUMNS {
         f.insert(name, floats(name)?);
@@ -371,6 +382,7 @@ pub fn rows_from_frame(df: &DataFrame) -> Result<Vec<ShotRow>> {
             theta2_err_deg: g("theta2_err_deg", i),
             path_model1: pm1[i].clone(),
             path_model2: pm2[i].clone(),
+            cloth_model: cloth[i].clone(),
             ball_radius_px: g("ball_radius_px", i),
             impact_x_px: g("impact_x_px", i),
             impact_y_px: g("impact_y_px", i),

@@ -62,6 +62,7 @@ fn synth_and_extract(dir: &Path) -> (Vec<ShotRow>, Truth) {
         overlays: None,
         jobs: None,
         shard: None,
+        no_texture: false,
     });
     let rows = read_angle_table(&table).expect("angle table");
     let truth_rows =

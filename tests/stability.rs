@@ -265,7 +265,7 @@ mod extraction {
     use streakfit::synth::{SynthArgs, Tier};
     use streakfit::table::Status;
     use streakfit::vision::image_io::{self, RgbImage};
-    use streakfit::vision::{AnalysisOptions, analyse};
+    use streakfit::vision::{AnalysisOptions, Cloth, analyse};
 
     fn tmp(name: &str) -> PathBuf {
         let d =
@@ -316,21 +316,33 @@ mod extraction {
 
     #[test]
     fn black_and_saturated_images_are_declined_with_reasons() {
-        let a = analyse(&flat(600, 400, [0.0; 3]), None, &AnalysisOptions::default());
+        let a = analyse(
+            &flat(600, 400, [0.0; 3]),
+            Cloth::Surface,
+            &AnalysisOptions::default(),
+        );
         assert_eq!(a.status, Status::Declined);
         assert!(!a.reason.is_empty());
-        let a = analyse(&flat(600, 400, [1.0; 3]), None, &AnalysisOptions::default());
+        let a = analyse(
+            &flat(600, 400, [1.0; 3]),
+            Cloth::Surface,
+            &AnalysisOptions::default(),
+        );
         assert_eq!(a.status, Status::Declined);
         assert!(a.reason.starts_with("saturated"), "{}", a.reason);
     }
 
     #[test]
     fn no_collision_and_one_ball_only_are_declined() {
-        let a = analyse(&cloth(600, 400), None, &AnalysisOptions::default());
+        let a = analyse(
+            &cloth(600, 400),
+            Cloth::Surface,
+            &AnalysisOptions::default(),
+        );
         assert_eq!(a.status, Status::Declined, "{}", a.reason);
         let mut one = cloth(600, 400);
         add_disc(&mut one, 300.0, 200.0, 30.0, [0.9, 0.8, 0.2]);
-        let a = analyse(&one, None, &AnalysisOptions::default());
+        let a = analyse(&one, Cloth::Surface, &AnalysisOptions::default());
         assert_eq!(a.status, Status::Declined, "{}", a.reason);
         assert!(a.psi_deg.is_none());
     }
@@ -374,7 +386,10 @@ mod extraction {
         rgb16.save(&tif).unwrap();
         let (a, b) = (image_io::load(&png).unwrap(), image_io::load(&tif).unwrap());
         let opts = AnalysisOptions::default();
-        let (ra, rb) = (analyse(&a, None, &opts), analyse(&b, None, &opts));
+        let (ra, rb) = (
+            analyse(&a, Cloth::Surface, &opts),
+            analyse(&b, Cloth::Surface, &opts),
+        );
         assert_eq!(ra.status, rb.status);
         assert_eq!(ra.status, Status::Ok, "{}", ra.reason);
         assert!((ra.psi_deg.unwrap() - rb.psi_deg.unwrap()).abs() < 1e-6);
@@ -401,7 +416,7 @@ mod extraction {
                 }
             }
         }
-        let a = analyse(&img, None, &AnalysisOptions::default());
+        let a = analyse(&img, Cloth::Surface, &AnalysisOptions::default());
         let psi_true: f64 = truth["psi_deg"].parse().unwrap();
         // The extractor does not yet separate a third ball's streak (issue 4): it must decline
         // with its reason rather than report angles bent by the stray light.

@@ -921,7 +921,7 @@ mod tests {
         let base = bd.base_plate();
         let img = to_float(&render(frame, &bd, &base, seed));
         let plate = to_float(&render(&Frame::default(), &bd, &base, None));
-        let sig = background::build(&img, Some(&plate), 600).expect("signal");
+        let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         fit(&sig, sig.u, g).expect("arc fit")
     }
 

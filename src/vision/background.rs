@@ -19,6 +19,7 @@
 //! nothing, as it should: its light then differs from the cloth only as a blotch does.
 
 use super::image_io::RgbImage;
+use super::texture::ClothTexture;
 use nalgebra::{DMatrix, DVector};
 
 /// Downsampled target size (longest side) for the coarse search.
@@ -51,6 +52,8 @@ pub struct Signal {
     pub cloth_level: f32,
     /// Whether a background plate was subtracted (the cloth's texture is then gone too).
     pub plate: bool,
+    /// The cloth model used.
+    pub cloth: ClothModel,
 }
 
 impl Signal {
@@ -105,7 +108,7 @@ pub fn saturated_fraction(img: &RgbImage) -> f64 {
     sat as f64 / n as f64
 }
 
-fn block_mean(img: &RgbImage, f: usize) -> (usize, usize, Vec<[f32; 3]>) {
+pub(crate) fn block_mean(img: &RgbImage, f: usize) -> (usize, usize, Vec<[f32; 3]>) {
     let (cw, ch) = (img.w / f, img.h / f);
     let mut out = vec![[0f32; 3]; cw * ch];
     let norm = 1.0 / (f * f) as f32;
@@ -215,6 +218,13 @@ fn poly_terms(x: f64, y: f64, out: &mut Vec<f64>) {
 /// Fits the cloth surface per channel to block medians of the coarse image and returns it on
 /// the coarse grid.
 fn fit_cloth_surface(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    let coef = fit_cloth_poly(cw, ch, coarse);
+    eval_surface(&coef, cw, ch, 1.0, cw as f64, ch as f64)
+}
+
+/// The cloth polynomial's coefficients per channel, in coordinates normalised to `[-1, 1]` over
+/// the coarse grid's extent.
+pub(crate) fn fit_cloth_poly(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> [DVector<f64>; 3] {
     let g = (cw.max(ch) / 75).max(2);
     let (gw, gh) = (cw / g, ch / g);
     let mut pts: Vec<(f64, f64, [f32; 3])> = Vec::with_capacity(gw * gh);
@@ -303,14 +313,28 @@ fn fit_cloth_surface(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> Vec<[f32; 3]>
         }
         inlier = new;
     }
-    let mut out = vec![[0f32; 3]; cw * ch];
-    for y in 0..ch {
-        let yn = 2.0 * (y as f64 + 0.5) / ch as f64 - 1.0;
-        for x in 0..cw {
-            let xn = 2.0 * (x as f64 + 0.5) / cw as f64 - 1.0;
+    coef
+}
+
+/// The cloth surface on a `gw × gh` grid of cells `cell` coarse cells wide, the polynomial's
+/// normalised coordinates spanning `span_w × span_h` coarse cells.
+pub(crate) fn eval_surface(
+    coef: &[DVector<f64>; 3],
+    gw: usize,
+    gh: usize,
+    cell: f64,
+    span_w: f64,
+    span_h: f64,
+) -> Vec<[f32; 3]> {
+    let mut terms = Vec::new();
+    let mut out = vec![[0f32; 3]; gw * gh];
+    for y in 0..gh {
+        let yn = 2.0 * (y as f64 + 0.5) * cell / span_h - 1.0;
+        for x in 0..gw {
+            let xn = 2.0 * (x as f64 + 0.5) * cell / span_w - 1.0;
             poly_terms(xn, yn, &mut terms);
             for c in 0..3 {
-                out[y * cw + x][c] = terms
+                out[y * gw + x][c] = terms
                     .iter()
                     .zip(coef[c].iter())
                     .map(|(t, a)| t * a)
@@ -321,12 +345,56 @@ fn fit_cloth_surface(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> Vec<[f32; 3]>
     out
 }
 
-/// Builds the ball signal of a photo; `plate` is the empty-table background when known.
-pub fn build(
-    img: &RgbImage,
-    plate: Option<&RgbImage>,
-    coarse_side: usize,
-) -> Result<Signal, String> {
+/// What the cloth of a photo is modelled from.
+#[derive(Debug, Clone, Copy)]
+pub enum Cloth<'a> {
+    /// The photo's own smooth surface.
+    Surface,
+    /// A plate of the empty table in the same light (`background` in `scene.toml`).
+    Plate(&'a RgbImage),
+    /// The folder's fixed texture ([`super::texture`]) on top of the photo's own surface, used
+    /// when it lowers the photo's cloth scatter.
+    Texture(&'a ClothTexture),
+}
+
+/// The cloth model a signal was built with (a column of the angle table).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ClothModel {
+    Surface,
+    Plate,
+    Texture,
+}
+
+impl ClothModel {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ClothModel::Surface => "surface",
+            ClothModel::Plate => "plate",
+            ClothModel::Texture => "texture",
+        }
+    }
+}
+
+fn residual_of(c_img: &[[f32; 3]], bg: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    c_img
+        .iter()
+        .zip(bg)
+        .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+        .collect()
+}
+
+fn scatter(diff: &[[f32; 3]]) -> f32 {
+    (0..3)
+        .map(|c| mad_sigma(&diff.iter().map(|d| d[c]).collect::<Vec<_>>()))
+        .sum()
+}
+
+/// Builds the ball signal of a photo with the given cloth model.
+pub fn build(img: &RgbImage, cloth: Cloth, coarse_side: usize) -> Result<Signal, String> {
+    let plate = match cloth {
+        Cloth::Plate(p) => Some(p),
+        _ => None,
+    };
     if let Some(p) = plate
         && (p.w != img.w || p.h != img.h)
     {
@@ -337,14 +405,46 @@ pub fn build(
     }
     let f = img.w.max(img.h).div_ceil(coarse_side.max(16)).max(1);
     let (cw, ch, c_img) = block_mean(img, f);
-    let bg = match plate {
-        Some(p) => block_mean(p, f).2,
-        None => fit_cloth_surface(cw, ch, &c_img),
+    // `plain`: the residual from the photo's own surface, whose colour covariance is also used
+    // with a texture (see below).
+    let (diff, plain, textured, model) = match cloth {
+        Cloth::Plate(p) => (
+            residual_of(&c_img, &block_mean(p, f).2),
+            None,
+            None,
+            ClothModel::Plate,
+        ),
+        Cloth::Surface => (
+            residual_of(&c_img, &fit_cloth_surface(cw, ch, &c_img)),
+            None,
+            None,
+            ClothModel::Surface,
+        ),
+        Cloth::Texture(t) => {
+            let plain = residual_of(&c_img, &fit_cloth_surface(cw, ch, &c_img));
+            if t.fits(img) {
+                let data = t.subtract(img);
+                let timg = RgbImage {
+                    w: img.w,
+                    h: img.h,
+                    data,
+                };
+                let c2 = block_mean(&timg, f).2;
+                let with = residual_of(&c2, &fit_cloth_surface(cw, ch, &c2));
+                if scatter(&with) < scatter(&plain) {
+                    (with, Some(plain), Some(timg.data), ClothModel::Texture)
+                } else {
+                    (plain, None, None, ClothModel::Surface)
+                }
+            } else {
+                (plain, None, None, ClothModel::Surface)
+            }
+        }
     };
-    let diff: Vec<[f32; 3]> = c_img
+    let bg: Vec<[f32; 3]> = c_img
         .iter()
-        .zip(&bg)
-        .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+        .zip(&diff)
+        .map(|(a, d)| [a[0] - d[0], a[1] - d[1], a[2] - d[2]])
         .collect();
     let sig_c: Vec<f32> = (0..3)
         .map(|c| mad_sigma(&diff.iter().map(|d| d[c]).collect::<Vec<_>>()).max(1e-5))
@@ -370,19 +470,21 @@ pub fn build(
         (acc[1] / norm) as f32,
         (acc[2] / norm) as f32,
     ];
-    let cov_inv = robust_cov_inv(&diff);
+    // With a texture, the colour weights come from the untextured residual: the texture map is
+    // blank where the object ball waits in most shots, and there, near the impact, the weights
+    // must still turn away from the cloth's brightness blotches.
+    let cov_inv = robust_cov_inv(plain.as_deref().unwrap_or(&diff));
     let proj = projector(&cov_inv, u);
     let coarse: Vec<f32> = diff
         .iter()
         .map(|d| proj[0] * d[0] + proj[1] * d[1] + proj[2] * d[2])
         .collect();
     let sigma_coarse = mad_sigma(&coarse).max(1e-6);
-    let mut rgb = img.data.clone();
-    if let Some(p) = plate {
-        for (v, q) in rgb.iter_mut().zip(&p.data) {
-            *v -= q;
-        }
-    }
+    let rgb = match (textured, plate) {
+        (Some(d), _) => d,
+        (None, Some(p)) => img.data.iter().zip(&p.data).map(|(v, q)| v - q).collect(),
+        (None, None) => img.data.clone(),
+    };
     let mut bl: Vec<f32> = bg
         .iter()
         .map(|b| u[0] * b[0] + u[1] * b[1] + u[2] * b[2])
@@ -407,6 +509,7 @@ pub fn build(
         cov_inv,
         cloth_level,
         plate: plate.is_some(),
+        cloth: model,
     })
 }
 

@@ -11,8 +11,9 @@
 //! Stages (one module each):
 //! - [`image_io`]: decode JPEG/PNG/TIFF (8/16 bit) to linear-in-file RGB `f32`;
 //! - [`background`]: cloth model (the `background` plate of `scene.toml`, or a robust polynomial
-//!   surface fitted to the photo itself), the ball-minus-cloth colour direction `u`, the projected
-//!   signal `S = u·(I - B)` and its MAD noise;
+//!   surface fitted to the photo itself, with the folder's fixed cloth texture from [`texture`]
+//!   when there is no plate), the ball-minus-cloth colour direction `u`, the projected signal
+//!   `S = u·(I - B)` and its MAD noise;
 //! - [`disc`]: the object ball's waiting disc, centre `O` and radius `R` from a circle fit to
 //!   sub-pixel edge points;
 //! - [`streak`]: coarse streak detection on a downsampled signal, then full-resolution tracking of
@@ -38,5 +39,7 @@ pub mod overlay;
 pub mod pathfit;
 pub mod shot;
 pub mod streak;
+pub mod texture;
 
+pub use background::{Cloth, ClothModel};
 pub use shot::{Analysis, AnalysisOptions, PathModels, analyse};

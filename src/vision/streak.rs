@@ -996,7 +996,7 @@ mod tests {
             }
         }
         let img = RgbImage { w, h, data };
-        let sig = background::build(&img, None, 600).expect("signal");
+        let sig = background::build(&img, background::Cloth::Surface, 600).expect("signal");
         let ko = KeepOut {
             ox,
             oy,

@@ -1,0 +1,244 @@
+//! The cloth's fixed texture, estimated from a folder's own photos when there is no plate.
+//!
+//! A camera fixed over one table sees the same cloth in every shot; only the balls move. So the
+//! median of many shots, each minus its own smooth cloth surface, is the cloth's texture: the
+//! blotches that a per-photo polynomial cannot follow and that bias a faint streak's centre-line.
+//! For each of up to [`MAX_IMAGES`] photos (evenly spaced in the folder's sorted list) the
+//! residual `r_i = I_i - B_i` of 2×2 block means from the photo's own cloth surface `B_i` (the
+//! polynomial of [`super::background`]) is formed; cells near balls (box-smoothed `Σ|r_i|` above
+//! its median by more than 5 MAD, dilated by about a ball radius) are masked; the texture `T` is
+//! the per-cell median of the unmasked residuals where at least a third of the photos (and no
+//! fewer than [`MIN_SAMPLES`]) see cloth, and 0 elsewhere: the middle of the table, where the
+//! object ball waits in most shots, keeps its texture rather than receive a ghost of the balls.
+//! A photo uses `T` only when subtracting it lowers the scatter of its own cloth residual
+//! ([`super::background::build`]), so a camera that moved, or another table, gets the plain
+//! surface.
+
+use super::background::{block_mean, box_blur, eval_surface, fit_cloth_poly, mad_sigma, median};
+use super::image_io::RgbImage;
+use rayon::prelude::*;
+
+/// Block size (px) of the texture map: fine enough for the cloth's ball-sized blotches and their
+/// finer grain, coarse enough to halve the sensor noise of each photo's residual.
+pub const BLOCK: usize = 2;
+/// Photos used at most (the median's noise falls as `1/√n`; memory grows as `n`).
+pub const MAX_IMAGES: usize = 15;
+/// Fewest photos for a texture (fewer cannot outvote the balls where shots overlap).
+pub const MIN_IMAGES: usize = 6;
+/// Fewest unmasked photos for a cell's median.
+pub const MIN_SAMPLES: usize = 4;
+
+/// One photo's residual from its own cloth surface, on the texture grid, with its ball mask.
+#[derive(Debug, Clone)]
+pub struct Residual {
+    w: usize,
+    h: usize,
+    r: Vec<[f32; 3]>,
+    cloth: Vec<bool>,
+}
+
+/// The texture map of a folder (see the module doc).
+#[derive(Debug, Clone)]
+pub struct ClothTexture {
+    /// Size of the photos it belongs to (full resolution).
+    pub w: usize,
+    pub h: usize,
+    /// Grid size (`w / BLOCK`, `h / BLOCK`).
+    pub tw: usize,
+    pub th: usize,
+    /// Texture per cell and channel; 0 where not estimated.
+    pub t: Vec<[f32; 3]>,
+    /// Fraction of cells estimated.
+    pub coverage: f64,
+    /// Photos the median was taken over.
+    pub images: usize,
+}
+
+/// Coarse grid factor of [`super::background::build`] for this photo size.
+pub fn coarse_factor(w: usize, h: usize, coarse_side: usize) -> usize {
+    w.max(h).div_ceil(coarse_side.max(16)).max(1)
+}
+
+/// Which of `n` sorted photos to use: up to [`MAX_IMAGES`], evenly spaced.
+pub fn pick(n: usize) -> Vec<usize> {
+    let k = n.min(MAX_IMAGES);
+    (0..k).map(|i| i * n / k).collect()
+}
+
+/// The residual of one photo from its own cloth surface, and its cloth mask.
+pub fn residual(img: &RgbImage, coarse_side: usize) -> Residual {
+    let f = coarse_factor(img.w, img.h, coarse_side);
+    let (cw, ch, coarse) = block_mean(img, f);
+    let coef = fit_cloth_poly(cw, ch, &coarse);
+    let (tw, th, blocks) = block_mean(img, BLOCK);
+    let surface = eval_surface(&coef, tw, th, BLOCK as f64 / f as f64, cw as f64, ch as f64);
+    let r: Vec<[f32; 3]> = blocks
+        .iter()
+        .zip(&surface)
+        .map(|(b, s)| [b[0] - s[0], b[1] - s[1], b[2] - s[2]])
+        .collect();
+    // Balls: where the summed |r|, smoothed over a fraction of a ball, stands out.
+    let a: Vec<f32> = r
+        .iter()
+        .map(|d| d[0].abs() + d[1].abs() + d[2].abs())
+        .collect();
+    let side = tw.max(th);
+    let sm = box_blur(&a, tw, th, (side / 150).max(1));
+    let level = median(&mut sm.clone());
+    let thr = level + 5.0 * mad_sigma(&sm).max(1e-6);
+    let hot: Vec<f32> = sm.iter().map(|&v| f32::from(v > thr)).collect();
+    let rd = (side / 60).max(1);
+    let near = box_blur(&hot, tw, th, rd);
+    // Half a hot cell in the window: a running box sum does not return to exactly 0.
+    let tiny = 0.5 / ((2 * rd + 1) * (2 * rd + 1)) as f32;
+    let cloth = near.iter().map(|&v| v < tiny).collect();
+    Residual {
+        w: img.w,
+        h: img.h,
+        r,
+        cloth,
+    }
+}
+
+impl Residual {
+    /// Size of the photo (full resolution).
+    pub fn size(&self) -> (usize, usize) {
+        (self.w, self.h)
+    }
+}
+
+impl ClothTexture {
+    /// The median texture of the residuals (all of one photo size), or why there is none.
+    pub fn from_residuals(res: &[Residual]) -> Result<ClothTexture, String> {
+        if res.len() < MIN_IMAGES {
+            return Err(format!(
+                "{} photos of one size (a cloth texture needs at least {MIN_IMAGES})",
+                res.len()
+            ));
+        }
+        let (w, h) = (res[0].w, res[0].h);
+        if res.iter().any(|r| r.w != w || r.h != h) {
+            return Err("photos of different sizes".into());
+        }
+        let (tw, th) = (w / BLOCK, h / BLOCK);
+        let need = MIN_SAMPLES.max(res.len().div_ceil(3));
+        let mut t = vec![[0f32; 3]; tw * th];
+        t.par_chunks_mut(tw).enumerate().for_each(|(y, row)| {
+            let mut buf: [Vec<f32>; 3] = Default::default();
+            for (x, cell) in row.iter_mut().enumerate() {
+                let i = y * tw + x;
+                for b in &mut buf {
+                    b.clear();
+                }
+                for rr in res.iter().filter(|rr| rr.cloth[i]) {
+                    for c in 0..3 {
+                        buf[c].push(rr.r[i][c]);
+                    }
+                }
+                if buf[0].len() >= need {
+                    *cell = [
+                        median(&mut buf[0]),
+                        median(&mut buf[1]),
+                        median(&mut buf[2]),
+                    ];
+                }
+            }
+        });
+        let estimated = t.iter().filter(|v| v.iter().any(|&c| c != 0.0)).count();
+        Ok(ClothTexture {
+            w,
+            h,
+            tw,
+            th,
+            t,
+            coverage: estimated as f64 / (tw * th) as f64,
+            images: res.len(),
+        })
+    }
+
+    /// Whether the map belongs to photos of this size.
+    pub fn fits(&self, img: &RgbImage) -> bool {
+        self.w == img.w && self.h == img.h
+    }
+
+    /// `img` minus the texture (nearest cell), interleaved RGB at full resolution.
+    pub fn subtract(&self, img: &RgbImage) -> Vec<f32> {
+        let mut out = img.data.clone();
+        for (y, row) in out.chunks_exact_mut(3 * img.w).enumerate() {
+            let trow = &self.t[(y / BLOCK).min(self.th - 1) * self.tw..][..self.tw];
+            for (x, px) in row.chunks_exact_mut(3).enumerate() {
+                let tv = trow[(x / BLOCK).min(self.tw - 1)];
+                px[0] -= tv[0];
+                px[1] -= tv[1];
+                px[2] -= tv[2];
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cloth with a smooth gradient and a fixed blotch pattern, and a bright "ball" that sits
+    /// in a different place in each photo.
+    fn photo(i: usize, w: usize, h: usize) -> RgbImage {
+        let mut data = Vec::with_capacity(3 * w * h);
+        let (bx, by) = (40.0 + 25.0 * i as f64, 30.0 + 10.0 * (i % 4) as f64);
+        for y in 0..h {
+            for x in 0..w {
+                let (xf, yf) = (x as f64, y as f64);
+                let tex = 0.02 * ((xf / 7.0).sin() * (yf / 5.0).cos());
+                let grad = 0.3 + 0.1 * xf / w as f64;
+                let ball = if (xf - bx).hypot(yf - by) < 12.0 {
+                    0.5
+                } else {
+                    0.0
+                };
+                let v = (grad + tex + ball) as f32;
+                data.extend_from_slice(&[v, 0.8 * v, 0.5 * v]);
+            }
+        }
+        RgbImage { w, h, data }
+    }
+
+    #[test]
+    fn texture_is_the_fixed_pattern_and_balls_leave_no_ghost() {
+        let (w, h) = (320, 200);
+        let res: Vec<Residual> = (0..8).map(|i| residual(&photo(i, w, h), 80)).collect();
+        let tex = ClothTexture::from_residuals(&res).expect("eight photos");
+        assert!(tex.coverage > 0.9, "coverage {}", tex.coverage);
+        // Away from the edges, where the degree-4 surface follows the gradient closely, the
+        // map reproduces the blotches' 2×2 block means.
+        let mut worst = 0f64;
+        for cy in 10..tex.th - 10 {
+            for cx in 10..tex.tw - 10 {
+                let v = tex.t[cy * tex.tw + cx][0] as f64;
+                if v == 0.0 {
+                    continue;
+                }
+                let mut want = 0.0;
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let (xf, yf) = ((2 * cx + dx) as f64, (2 * cy + dy) as f64);
+                    want += 0.25 * 0.02 * ((xf / 7.0).sin() * (yf / 5.0).cos());
+                }
+                worst = worst.max((v - want).abs());
+            }
+        }
+        assert!(worst < 0.004, "worst texture error {worst}");
+        // Subtracting it flattens a new photo's cloth to the gradient.
+        let img = photo(9, w, h);
+        let flat = tex.subtract(&img);
+        let (x, y) = (250usize, 150usize);
+        let want = 0.3 + 0.1 * x as f64 / w as f64;
+        assert!((flat[3 * (y * w + x)] as f64 - want).abs() < 0.005);
+    }
+
+    #[test]
+    fn too_few_photos_give_no_texture() {
+        let res: Vec<Residual> = (0..3).map(|i| residual(&photo(i, 160, 100), 80)).collect();
+        let err = ClothTexture::from_residuals(&res).unwrap_err();
+        assert!(err.contains("at least 6"), "{err}");
+    }
+}
