@@ -671,28 +671,19 @@ pub fn analyse(img: &RgbImage, cloth: Cloth, opts: &AnalysisOptions) -> Analysis
     a
 }
 
-/// The scene read around the object ball's disc `dsc`. `second_disc` is set when this disc was
-/// taken from a ball resting at the first reading's impact point (see [`time_arrow`]).
-fn read_from_disc(
+/// Tracks the candidates and keeps up to three distinct streaks, longest first: the raw
+/// tracks, the samples clear of the other streaks, and each streak's colour direction.
+#[allow(clippy::type_complexity)]
+fn select_streaks(
     sig: &Signal,
-    dsc: disc::Disc,
+    cands: &[streak::CoarseStreak],
+    r: f64,
+    ko: KeepOut,
     opts: &AnalysisOptions,
-    second_disc: bool,
-) -> Analysis {
-    let mut out = Analysis::declined(Status::Declined, "");
-    out.ball_radius_px = Some(dsc.r);
-    let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
-    out.disc = Some(dsc.clone());
-    let cands = streak::find_coarse(sig, o.0, o.1, r);
-    let ko = KeepOut {
-        ox: o.0,
-        oy: o.1,
-        radius: 1.25 * r,
-    };
+) -> (Vec<Vec<Sample>>, Vec<Vec<Sample>>, Vec<[f32; 3]>) {
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let tracked: Vec<(Vec<Sample>, [f32; 3])> = cands
         .iter()
-        .take(4)
         .map(|c| {
             let t = streak::track(sig, c.seed, c.dir, r, opts.sample_step_r, ko, c.u);
             if debug {
@@ -788,6 +779,38 @@ fn read_from_disc(
     let raw: Vec<Vec<Sample>> = pairs.iter().map(|p| p.0.clone()).collect();
     let colours: Vec<[f32; 3]> = pairs.iter().map(|p| p.2).collect();
     let kept: Vec<Vec<Sample>> = pairs.into_iter().map(|p| p.1).collect();
+    (raw, kept, colours)
+}
+
+/// The scene read around the object ball's disc `dsc`. `second_disc` is set when this disc was
+/// taken from a ball resting at the first reading's impact point (see [`time_arrow`]).
+fn read_from_disc(
+    sig: &Signal,
+    dsc: disc::Disc,
+    opts: &AnalysisOptions,
+    second_disc: bool,
+) -> Analysis {
+    let mut out = Analysis::declined(Status::Declined, "");
+    out.ball_radius_px = Some(dsc.r);
+    let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
+    out.disc = Some(dsc.clone());
+    let cands = streak::find_coarse(sig, o.0, o.1, r);
+    let ko = KeepOut {
+        ox: o.0,
+        oy: o.1,
+        radius: 1.25 * r,
+    };
+    let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+    let ring = &cands[..cands.len().min(4)];
+    let (mut raw, mut kept, mut colours) = select_streaks(sig, ring, r, ko, opts);
+    if kept.len() < 3 {
+        // Fewer than three streaks crossed the rings: look for faint ones along their length.
+        let faint = streak::find_faint(sig, o.0, o.1, r, ring);
+        if !faint.is_empty() {
+            let all: Vec<streak::CoarseStreak> = ring.iter().cloned().chain(faint).collect();
+            (raw, kept, colours) = select_streaks(sig, &all, r, ko, opts);
+        }
+    }
     out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
     let cue_stopped = match kept.len() {
         0 => {
