@@ -187,6 +187,7 @@ pub fn folder_textures(
         if js.len() < texture::MIN_IMAGES {
             continue;
         }
+        let t0 = Instant::now();
         let res: Vec<texture::Residual> = texture::pick(js.len())
             .par_iter()
             .filter_map(|&i| image_io::load(&js[i].path).ok())
@@ -217,10 +218,12 @@ pub fn folder_textures(
                 }
                 if verbose {
                     eprintln!(
-                        "extract: cloth texture of '{}' from {} photos ({:.0}% of the table)",
+                        "extract: cloth texture of '{}' from {} photos ({:.0}% of the table, \
+                         {:.1} s)",
                         dir.display(),
                         t.images,
-                        100.0 * t.coverage
+                        100.0 * t.coverage,
+                        t0.elapsed().as_secs_f64()
                     );
                 }
                 out.insert(dir, Arc::new(t));
