@@ -326,33 +326,28 @@ pub(crate) fn eval_surface(
     span_w: f64,
     span_h: f64,
 ) -> Vec<[f32; 3]> {
-    // Powers per column and per row, combined in `poly_terms`' order (x^i y^(t-i)).
-    let powers = |v: f64| {
-        let mut p = [1.0; POLY_DEGREE + 1];
-        for k in 1..=POLY_DEGREE {
-            p[k] = p[k - 1] * v;
-        }
-        p
-    };
-    let xp: Vec<[f64; POLY_DEGREE + 1]> = (0..gw)
-        .map(|x| powers(2.0 * (x as f64 + 0.5) * cell / span_w - 1.0))
-        .collect();
+    // Per row, the polynomial in x (coefficient of x^i: Σ_t a_(t,i) y^(t-i), in `poly_terms`'
+    // order), then Horner along the row.
     let mut out = vec![[0f32; 3]; gw * gh];
     for (y, row) in out.chunks_exact_mut(gw.max(1)).enumerate().take(gh) {
-        let yp = powers(2.0 * (y as f64 + 0.5) * cell / span_h - 1.0);
-        for (px, o) in xp.iter().zip(row.iter_mut()) {
-            let mut acc = [0f64; 3];
-            let mut k = 0;
-            for total in 0..=POLY_DEGREE {
-                for i in 0..=total {
-                    let t = px[i] * yp[total - i];
-                    for c in 0..3 {
-                        acc[c] += coef[c][k] * t;
-                    }
-                    k += 1;
+        let yn = 2.0 * (y as f64 + 0.5) * cell / span_h - 1.0;
+        let mut yp = [1.0; POLY_DEGREE + 1];
+        for k in 1..=POLY_DEGREE {
+            yp[k] = yp[k - 1] * yn;
+        }
+        let mut cx = [[0f64; POLY_DEGREE + 1]; 3];
+        let mut k = 0;
+        for total in 0..=POLY_DEGREE {
+            for i in 0..=total {
+                for c in 0..3 {
+                    cx[c][i] += coef[c][k] * yp[total - i];
                 }
+                k += 1;
             }
-            *o = acc.map(|v| v as f32);
+        }
+        for (x, o) in row.iter_mut().enumerate() {
+            let xn = 2.0 * (x as f64 + 0.5) * cell / span_w - 1.0;
+            *o = [0, 1, 2].map(|c| cx[c].iter().rev().fold(0.0, |acc, &a| acc * xn + a) as f32);
         }
     }
     out
