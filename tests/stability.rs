@@ -418,11 +418,11 @@ mod extraction {
         }
         let a = analyse(&img, Cloth::Surface, &AnalysisOptions::default());
         let psi_true: f64 = truth["psi_deg"].parse().unwrap();
-        // A third ball's straight streak across the photo, of the cue ball's colour: the cue
-        // ball's outgoing streak must share the incoming one's colour and the reading must be
-        // physical, so the stray light is left unused and the angles are those of the shot
-        // (measured 2026-11-24: psi 35.696° ± 0.064° for 35.650°, theta1 +0.046°, theta2
-        // +0.009°; before the colour check and the faint-streak stage it was declined).
+        // A third ball's straight streak across the photo, of the cue ball's colour. Until the
+        // faint-streak stage (`streak::find_faint`, rays integrated where fewer than three
+        // streaks cross the rings) this shot was declined ("no physical reading"); now the
+        // missing streak is found and the stray light is left out of the reading (measured
+        // 2026-11-24: psi 35.696° ± 0.064° for 35.650°, theta1 +0.046°, theta2 +0.009°).
         assert_eq!(a.status, Status::Ok, "{}", a.reason);
         for (name, v, sd) in [
             ("psi", a.psi_deg, a.psi_err_deg),
