@@ -31,6 +31,14 @@
 //! so that the incoming direction has `v_y ≥ 0`, hence `psi ∈ [0°, 90°)`. `delta` is the start
 //! tangent of a ball's path, `theta` the direction of its straight rolling part.
 
+//!
+//! Debug hooks (environment variables, read-only side effects): `STREAKFIT_DEBUG=1` prints the
+//! streak candidates, the ray search, the readings and the fits to stderr;
+//! `STREAKFIT_COARSE_PNG=FILE` writes the coarse detection map (Mahalanobis norm, 0 to 3× its
+//! threshold); `STREAKFIT_TEXTURE_PNG=FILE` writes the folder's cloth texture map (grey 128 = 0);
+//! `STREAKFIT_ARC_DUMP=FILE` writes the arc fit's window (data and residual). Use them with one
+//! photo (or `--jobs 1`): every analysis writes to the same file.
+
 pub mod arc;
 pub mod background;
 pub mod disc;

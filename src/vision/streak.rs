@@ -308,11 +308,15 @@ pub fn find_faint(
         [0, 1, 2].map(|c| chans[c][yi * w + xi] as f64)
     };
     let (ocx, ocy) = (ox / f - 0.5, oy / f - 0.5);
-    let taken: Vec<(f64, (f64, f64), (f64, f64))> = ring
+    let taken: Vec<Band> = ring
         .iter()
         .map(|c| {
             let p = (c.seed.0 / f - 0.5, c.seed.1 / f - 0.5);
-            ((p.1 - ocy).atan2(p.0 - ocx), p, c.dir)
+            Band {
+                phi: (p.1 - ocy).atan2(p.0 - ocx),
+                p,
+                d: c.dir,
+            }
         })
         .collect();
     ray_candidates(&s, w, h, (ocx, ocy), rc, &taken, &colour_at)
@@ -322,6 +326,14 @@ pub fn find_faint(
             ..c
         })
         .collect()
+}
+
+/// A streak the rings found, as seen by the ray search (coarse coordinates): the angle of its
+/// ring crossing around the disc, a point on it and its direction.
+struct Band {
+    phi: f64,
+    p: (f64, f64),
+    d: (f64, f64),
 }
 
 /// Significance above which a ray is a streak, in units of the coarse map's own noise `σ_s`
@@ -344,16 +356,16 @@ fn ray_candidates(
     h: usize,
     o: (f64, f64),
     rc: f64,
-    taken: &[(f64, (f64, f64), (f64, f64))],
+    taken: &[Band],
     colour_at: &dyn Fn(f64, f64) -> [f64; 3],
 ) -> Vec<(f64, CoarseStreak)> {
     let level = super::background::median(&mut s.to_vec()) as f64;
     let sigma = (mad_sigma(s) as f64).max(1e-9);
     // The streaks the rings found, as straight bands: a ray that crosses one skips it.
     let in_band = |x: f64, y: f64| {
-        taken.iter().any(|(_, p, d)| {
-            let (dx, dy) = (x - p.0, y - p.1);
-            (dx * d.1 - dy * d.0).abs() < 1.8 * rc
+        taken.iter().any(|b| {
+            let (dx, dy) = (x - b.p.0, y - b.p.1);
+            (dx * b.d.1 - dy * b.d.0).abs() < 1.8 * rc
         })
     };
     let at = |x: f64, y: f64| -> Option<f64> {
@@ -368,8 +380,8 @@ fn ray_candidates(
     let step = 1.0;
     let t0 = 2.5 * rc;
     let free = |a: f64| {
-        taken.iter().all(|(p, _, _)| {
-            let d = (a - p).rem_euclid(std::f64::consts::TAU);
+        taken.iter().all(|b| {
+            let d = (a - b.phi).rem_euclid(std::f64::consts::TAU);
             d.min(std::f64::consts::TAU - d) > 20f64.to_radians()
         })
     };

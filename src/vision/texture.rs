@@ -151,8 +151,8 @@ impl ClothTexture {
                 b.clear();
             }
             for rr in res.iter().filter(|rr| rr.cloth[i]) {
-                for c in 0..3 {
-                    buf[c].push(rr.r[i][c]);
+                for (b, v) in buf.iter_mut().zip(rr.r[i]) {
+                    b.push(v);
                 }
             }
         };
