@@ -161,6 +161,29 @@ fn folder_texture_without_plate() {
     );
     let (tex, rows_tex) = extract_errors(&dir, 12, &[]);
     let (plain, rows_plain) = extract_errors(&dir, 12, &["--no-texture"]);
+    // Every shard of an array job builds the texture from the same photos of the whole folder,
+    // so the shard tables are the full table's rows, number for number.
+    let mut sharded: Vec<ShotRow> = Vec::new();
+    for k in ["1/2", "2/2"] {
+        let out = dir.join(format!("shard{}.csv", &k[..1]));
+        let o = extract(&[
+            dir.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+            "--shard".as_ref(),
+            k.as_ref(),
+        ]);
+        assert!(o.status.code().is_some(), "extract crashed");
+        sharded.extend(read_angle_table(&out).unwrap());
+    }
+    sharded.sort_by(|a, b| a.file.cmp(&b.file));
+    assert_eq!(sharded.len(), rows_tex.len());
+    for (a, b) in sharded.iter().zip(&rows_tex) {
+        assert_eq!(
+            (&a.file, a.status, a.psi_deg, a.theta2_deg, &a.cloth_model),
+            (&b.file, b.status, b.psi_deg, b.theta2_deg, &b.cloth_model)
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
     for (rows, model) in [(&rows_tex, "texture"), (&rows_plain, "surface")] {
         let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
