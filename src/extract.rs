@@ -50,7 +50,7 @@ pub struct ExtractArgs {
     #[arg(long)]
     pub shard: Option<String>,
     /// Do not estimate the cloth's fixed texture from the folder's own photos (used by default
-    /// for photos without a plate, in folders of at least 6 photos of one size).
+    /// for photos without a plate, in folders of at least 8 photos of one size).
     #[arg(long)]
     pub no_texture: bool,
 }

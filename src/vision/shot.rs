@@ -671,16 +671,24 @@ pub fn analyse(img: &RgbImage, cloth: Cloth, opts: &AnalysisOptions) -> Analysis
     a
 }
 
-/// Tracks the candidates and keeps up to three distinct streaks, longest first: the raw
-/// tracks, the samples clear of the other streaks, and each streak's colour direction.
-#[allow(clippy::type_complexity)]
+/// Up to three distinct streaks, longest first.
+struct Selected {
+    /// The tracked centre-lines.
+    raw: Vec<Vec<Sample>>,
+    /// Their samples clear of the other streaks.
+    kept: Vec<Vec<Sample>>,
+    /// Each streak's colour direction (ball minus cloth).
+    colours: Vec<[f32; 3]>,
+}
+
+/// Tracks the candidates and keeps up to three distinct streaks (see [`Selected`]).
 fn select_streaks(
     sig: &Signal,
     cands: &[streak::CoarseStreak],
     r: f64,
     ko: KeepOut,
     opts: &AnalysisOptions,
-) -> (Vec<Vec<Sample>>, Vec<Vec<Sample>>, Vec<[f32; 3]>) {
+) -> Selected {
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let tracked: Vec<(Vec<Sample>, [f32; 3])> = cands
         .iter()
@@ -779,7 +787,7 @@ fn select_streaks(
     let raw: Vec<Vec<Sample>> = pairs.iter().map(|p| p.0.clone()).collect();
     let colours: Vec<[f32; 3]> = pairs.iter().map(|p| p.2).collect();
     let kept: Vec<Vec<Sample>> = pairs.into_iter().map(|p| p.1).collect();
-    (raw, kept, colours)
+    Selected { raw, kept, colours }
 }
 
 /// The scene read around the object ball's disc `dsc`. `second_disc` is set when this disc was
@@ -802,15 +810,16 @@ fn read_from_disc(
     };
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let ring = &cands[..cands.len().min(4)];
-    let (mut raw, mut kept, mut colours) = select_streaks(sig, ring, r, ko, opts);
-    if kept.len() < 3 {
+    let mut sel = select_streaks(sig, ring, r, ko, opts);
+    if sel.kept.len() < 3 {
         // Fewer than three streaks crossed the rings: look for faint ones along their length.
         let faint = streak::find_faint(sig, o.0, o.1, r, ring);
         if !faint.is_empty() {
             let all: Vec<streak::CoarseStreak> = ring.iter().cloned().chain(faint).collect();
-            (raw, kept, colours) = select_streaks(sig, &all, r, ko, opts);
+            sel = select_streaks(sig, &all, r, ko, opts);
         }
     }
+    let Selected { raw, kept, colours } = sel;
     out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
     let cue_stopped = match kept.len() {
         0 => {
