@@ -104,6 +104,9 @@ fn extract_errors(
     let t = truth(dir);
     let mut errs: HashMap<&'static str, Vec<f64>> = HashMap::new();
     for r in rows.iter().filter(|r| r.status == Status::Ok) {
+        // A start tangent is only reported with its rolling line.
+        assert!(r.theta1_deg.is_some() || r.delta1_deg.is_none(), "{r:?}");
+        assert!(r.theta2_deg.is_some() || r.delta2_deg.is_none(), "{r:?}");
         let tr = &t[&r.file];
         for (name, v) in [
             ("psi", r.psi_deg),
@@ -142,7 +145,11 @@ fn clean_tier_accuracy() {
     assert!(m("psi") < 0.3, "psi median error {}", m("psi"));
     assert!(m("theta1") < 0.3, "theta1 median error {}", m("theta1"));
     assert!(m("theta2") < 0.6, "theta2 median error {}", m("theta2"));
-    assert!(m("delta2") < 0.8, "delta2 median error {}", m("delta2"));
+    // Since 2026-11-24 no delta2 is left on this set: its one value came with an unresolved
+    // theta2, and a start tangent is now reported only with its rolling line.
+    if let Some(d2) = errs.get("delta2") {
+        assert!(median(d2.clone()) < 0.8, "delta2 errors {d2:?}");
+    }
 }
 
 /// Without a plate the cloth's fixed texture (blotches of the ball's size) moves the faint

@@ -1197,6 +1197,30 @@ fn read_from_disc(
     if delta1_from_arc {
         notes.retain(|n| !n.starts_with("delta1"));
     }
+    // A start tangent belongs to a path whose rolling line is measured: with theta unresolved
+    // the sliding arc's end is free, and its start tangent is whatever a few samples suggest
+    // (clean shot_018: 12 samples on the cue ball's rolling line read as the start of a long
+    // parabola, delta1 40° off at a stated 0.7°).
+    for (theta, delta, err, name) in [
+        (
+            out.theta1_deg,
+            &mut out.delta1_deg,
+            &mut out.delta1_err_deg,
+            "delta1",
+        ),
+        (
+            out.theta2_deg,
+            &mut out.delta2_deg,
+            &mut out.delta2_err_deg,
+            "delta2",
+        ),
+    ] {
+        if theta.is_none() && delta.is_some() {
+            *delta = None;
+            *err = None;
+            notes.push(format!("{name} not resolved (its rolling line is not)"));
+        }
+    }
     out.path_model1 = fit.m1.map(|m| m.name().to_string());
     out.path_model2 = Some(fit.m2.name().to_string());
     out.ball_radius_px = Some(fit.r());
