@@ -24,6 +24,8 @@ pub struct CoarseStreak {
     pub weight: f64,
     /// Unit colour direction of this ball's light (ball minus cloth).
     pub u: [f32; 3],
+    /// Found by the line integrals of [`find_faint`] rather than at a ring crossing.
+    pub faint: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -220,6 +222,7 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
                     dir: d,
                     weight: sw,
                     u,
+                    faint: false,
                 },
             ));
         }
@@ -478,6 +481,7 @@ fn ray_candidates(
                         dir: d,
                         weight: 0.0,
                         u: col.map(|v| (v / cn) as f32),
+                        faint: true,
                     },
                 ));
             }
