@@ -184,6 +184,9 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
             lines.push(format!("R = {rr:.2} px"));
         }
     }
+    if let Some(c) = a.cloth {
+        lines.push(format!("cloth model: {}", c.as_str()));
+    }
     for (i, l) in lines.iter().enumerate() {
         let y = (fs * 0.3 + i as f32 * fs * 1.25) as i32;
         draw_text_mut(
