@@ -6,7 +6,8 @@
 //! For each of up to [`MAX_IMAGES`] photos (evenly spaced in the folder's sorted list) the
 //! residual `r_i = I_i - B_i` of 2×2 block means from the photo's own cloth surface `B_i` (the
 //! polynomial of [`super::background`]) is formed; cells near balls (box-smoothed `Σ|r_i|` above
-//! its median by more than 5 MAD, dilated by about a ball radius) are masked; the texture `T` is
+//! its median by more than 5 MAD, dilated by 1/60 of the photo's longer side: 40 px at 2400 px,
+//! 0.4 R there) are masked; the texture `T` is
 //! the per-cell median of the unmasked residuals within 3 noise sigmas of their median (twice;
 //! streak light the mask missed is clipped) where at least a third of the photos (and no
 //! fewer than [`MIN_SAMPLES`]) see cloth, and 0 elsewhere: the middle of the table, where the
