@@ -295,10 +295,8 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             Some(p) => Some(image_io::load(p).map_err(|e| anyhow!("{}: {e}", p.display()))?),
             None => None,
         };
-        let texture = j
-            .path
-            .parent()
-            .and_then(|d| textures.get(d))
+        let texture = textures
+            .get(&crate::extract::folder_of(j))
             .filter(|_| plate.is_none())
             .cloned();
         let t = truth

@@ -159,7 +159,7 @@ pub fn list_jobs(dirs: &[PathBuf]) -> Result<Vec<Job>, CliError> {
 }
 
 /// The folder a job's photo is in (the key of its cloth texture).
-fn folder_of(job: &Job) -> PathBuf {
+pub fn folder_of(job: &Job) -> PathBuf {
     job.path.parent().unwrap_or(Path::new(".")).to_path_buf()
 }
 
@@ -208,13 +208,8 @@ pub fn folder_textures(
             .collect();
         match ClothTexture::from_residuals(&res) {
             Ok(t) => {
-                if let Ok(path) = std::env::var("STREAKFIT_TEXTURE_PNG") {
-                    let img = image::GrayImage::from_fn(t.tw as u32, t.th as u32, |x, y| {
-                        let v = t.t[y as usize * t.tw + x as usize];
-                        let s = v[0] + v[1] + v[2];
-                        image::Luma([(128.0 + 2000.0 * s).clamp(0.0, 255.0) as u8])
-                    });
-                    let _ = img.save(path);
+                if let Some(path) = std::env::var_os("STREAKFIT_TEXTURE_PNG") {
+                    let _ = t.debug_picture().save(path);
                 }
                 if verbose {
                     eprintln!(

@@ -684,16 +684,19 @@ struct Selected {
     colours: Vec<[f32; 3]>,
 }
 
-/// Tracks the candidates and keeps up to three distinct streaks (see [`Selected`]).
-fn select_streaks(
+/// A tracked candidate: its centre-line samples and its colour direction.
+type Tracked = (Vec<Sample>, [f32; 3]);
+
+/// Tracks the candidates, dropping tracks too short to be a streak.
+fn track_candidates(
     sig: &Signal,
     cands: &[streak::CoarseStreak],
     r: f64,
     ko: KeepOut,
     opts: &AnalysisOptions,
-) -> Selected {
+) -> Vec<Tracked> {
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
-    let tracked: Vec<(Vec<Sample>, [f32; 3])> = cands
+    cands
         .iter()
         .map(|c| {
             let t = streak::track(sig, c.seed, c.dir, r, opts.sample_step_r, ko, c.u);
@@ -716,7 +719,11 @@ fn select_streaks(
         // other streaks' clean samples (realistic shot_017 tracked eight such, of 0–6 samples).
         .filter(|t| t.0.len() >= if t.2 { FAINT_MIN_SAMPLES } else { 5 })
         .map(|t| (t.0, t.1))
-        .collect();
+        .collect()
+}
+
+/// Keeps up to three distinct streaks of the tracked candidates (see [`Selected`]).
+fn select_streaks(tracked: Vec<Tracked>, r: f64) -> Selected {
     let track_u: Vec<[f32; 3]> = tracked.iter().map(|t| t.1).collect();
     let mut tracks: Vec<Vec<Sample>> = tracked.into_iter().map(|t| t.0).collect();
     // Two candidates can track the same streak (inner and outer ring): keep the longer.
@@ -809,7 +816,8 @@ fn read_from_disc(
     out.ball_radius_px = Some(dsc.r);
     let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
     out.disc = Some(dsc.clone());
-    let cands = streak::find_coarse(sig, o.0, o.1, r);
+    let map = streak::CoarseMap::new(sig, r);
+    let cands = streak::find_coarse(&map, o.0, o.1);
     let ko = KeepOut {
         ox: o.0,
         oy: o.1,
@@ -817,13 +825,14 @@ fn read_from_disc(
     };
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let ring = &cands[..cands.len().min(4)];
-    let mut sel = select_streaks(sig, ring, r, ko, opts);
+    let mut tracked = track_candidates(sig, ring, r, ko, opts);
+    let mut sel = select_streaks(tracked.clone(), r);
     if sel.kept.len() < 3 {
         // Fewer than three streaks crossed the rings: look for faint ones along their length.
-        let faint = streak::find_faint(sig, o.0, o.1, r, ring);
+        let faint = streak::find_faint(&map, o.0, o.1, ring);
         if !faint.is_empty() {
-            let all: Vec<streak::CoarseStreak> = ring.iter().cloned().chain(faint).collect();
-            sel = select_streaks(sig, &all, r, ko, opts);
+            tracked.extend(track_candidates(sig, &faint, r, ko, opts));
+            sel = select_streaks(tracked, r);
         }
     }
     let Selected { raw, kept, colours } = sel;

@@ -45,11 +45,9 @@ pub struct Sample {
 /// separates streaks that touch near the impact and form one connected part). A run wider than two
 /// streaks is split in two. The seed is the run's signal-weighted centre, the direction the
 /// principal axis of the thresholded pixels within `3R` of it and beyond `3.5R` from `O`.
-pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> {
-    let (w, h) = (sig.cw, sig.ch);
-    let f = sig.f as f64;
-    let rc = r / f;
-    let (s, chans, thr) = norm_map(sig, rc);
+pub fn find_coarse(map: &CoarseMap, ox: f64, oy: f64) -> Vec<CoarseStreak> {
+    let (w, h, f, rc, thr) = (map.w, map.h, map.f, map.rc, map.thr);
+    let s = &map.s;
     if let Some(path) = std::env::var_os("STREAKFIT_COARSE_PNG") {
         let mx = s.iter().cloned().fold(0f32, f32::max).max(1e-9);
         let _ = image::GrayImage::from_fn(w as u32, h as u32, |x, y| {
@@ -58,13 +56,7 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
         .save(std::path::Path::new(&path));
         eprintln!("coarse: thr {thr} max {mx}");
     }
-    let colour_at = |x: f64, y: f64| -> [f64; 3] {
-        let (xi, yi) = (
-            x.round().clamp(0.0, (w - 1) as f64) as usize,
-            y.round().clamp(0.0, (h - 1) as f64) as usize,
-        );
-        [0, 1, 2].map(|c| chans[c][yi * w + xi] as f64)
-    };
+    let colour_at = |x: f64, y: f64| map.colour_at(x, y);
     let (ocx, ocy) = (ox / f - 0.5, oy / f - 0.5);
     let at = |x: f64, y: f64| -> Option<f32> {
         if x < 0.0 || y < 0.0 {
@@ -164,7 +156,7 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
             let u = if cn > 0.0 {
                 col.map(|v| (v / cn) as f32)
             } else {
-                sig.u
+                map.u
             };
             // Direction: the line through the seed (±2R) that carries the most light, a local
             // Radon transform. Both sides lie on the streak (it runs from near the disc outward)
@@ -251,9 +243,51 @@ pub fn find_coarse(sig: &Signal, ox: f64, oy: f64, r: f64) -> Vec<CoarseStreak> 
     out
 }
 
-/// The coarse detection map: the Mahalanobis norm of the colour difference box-smoothed over
-/// half a ball radius (see [`find_coarse`]), the smoothed channels, and the map's threshold
-/// (median + 4 MAD).
+/// The coarse detection map around one disc: the Mahalanobis norm of the colour difference
+/// box-smoothed over half a ball radius (see [`find_coarse`]), the smoothed channels (for a
+/// streak's colour), and the map's threshold (median + 4 MAD). Computed once per reading and
+/// shared by the ring scan and the faint-streak search.
+pub struct CoarseMap {
+    w: usize,
+    h: usize,
+    /// Downsampling factor and the ball radius on the coarse grid.
+    f: f64,
+    rc: f64,
+    s: Vec<f32>,
+    chans: Vec<Vec<f32>>,
+    thr: f32,
+    /// The photo's mean ball colour direction (a crossing's colour when it has none).
+    u: [f32; 3],
+}
+
+impl CoarseMap {
+    /// The map of `sig`'s coarse grid for balls of radius `r` (full-resolution px).
+    pub fn new(sig: &Signal, r: f64) -> CoarseMap {
+        let f = sig.f as f64;
+        let rc = r / f;
+        let (s, chans, thr) = norm_map(sig, rc);
+        CoarseMap {
+            w: sig.cw,
+            h: sig.ch,
+            f,
+            rc,
+            s,
+            chans,
+            thr,
+            u: sig.u,
+        }
+    }
+
+    /// Smoothed colour difference at the nearest coarse cell (clamped to the grid).
+    fn colour_at(&self, x: f64, y: f64) -> [f64; 3] {
+        let (xi, yi) = (
+            x.round().clamp(0.0, (self.w - 1) as f64) as usize,
+            y.round().clamp(0.0, (self.h - 1) as f64) as usize,
+        );
+        [0, 1, 2].map(|c| self.chans[c][yi * self.w + xi] as f64)
+    }
+}
+
 fn norm_map(sig: &Signal, rc: f64) -> (Vec<f32>, Vec<Vec<f32>>, f32) {
     let (w, h) = (sig.cw, sig.ch);
     let rb = ((rc / 2.0).round() as usize).max(1);
@@ -292,24 +326,8 @@ fn norm_map(sig: &Signal, rc: f64) -> (Vec<f32>, Vec<Vec<f32>>, f32) {
 
 /// Faint streaks that no ring caught (see [`ray_candidates`]), in directions away from the ring
 /// candidates `ring` (full-resolution seeds); seeds in full-resolution coordinates.
-pub fn find_faint(
-    sig: &Signal,
-    ox: f64,
-    oy: f64,
-    r: f64,
-    ring: &[CoarseStreak],
-) -> Vec<CoarseStreak> {
-    let (w, h) = (sig.cw, sig.ch);
-    let f = sig.f as f64;
-    let rc = r / f;
-    let (s, chans, _) = norm_map(sig, rc);
-    let colour_at = |x: f64, y: f64| -> [f64; 3] {
-        let (xi, yi) = (
-            x.round().clamp(0.0, (w - 1) as f64) as usize,
-            y.round().clamp(0.0, (h - 1) as f64) as usize,
-        );
-        [0, 1, 2].map(|c| chans[c][yi * w + xi] as f64)
-    };
+pub fn find_faint(map: &CoarseMap, ox: f64, oy: f64, ring: &[CoarseStreak]) -> Vec<CoarseStreak> {
+    let f = map.f;
     let (ocx, ocy) = (ox / f - 0.5, oy / f - 0.5);
     let taken: Vec<Band> = ring
         .iter()
@@ -322,7 +340,7 @@ pub fn find_faint(
             }
         })
         .collect();
-    ray_candidates(&s, w, h, (ocx, ocy), rc, &taken, &colour_at)
+    ray_candidates(map, (ocx, ocy), &taken)
         .into_iter()
         .map(|(_, c)| CoarseStreak {
             seed: ((c.seed.0 + 0.5) * f, (c.seed.1 + 0.5) * f),
@@ -353,15 +371,9 @@ const RAY_SIGNIFICANCE: f64 = 4.5;
 /// filter of a streak of unknown length; `level` the map's median) in units of `σ_s`. One
 /// candidate per run of directions above [`RAY_SIGNIFICANCE`]: the seed where the run's best ray
 /// crosses `4R`, the ray's direction, and the colour of its light.
-fn ray_candidates(
-    s: &[f32],
-    w: usize,
-    h: usize,
-    o: (f64, f64),
-    rc: f64,
-    taken: &[Band],
-    colour_at: &dyn Fn(f64, f64) -> [f64; 3],
-) -> Vec<(f64, CoarseStreak)> {
+fn ray_candidates(map: &CoarseMap, o: (f64, f64), taken: &[Band]) -> Vec<(f64, CoarseStreak)> {
+    let (s, w, h, rc) = (&map.s[..], map.w, map.h, map.rc);
+    let colour_at = |x: f64, y: f64| map.colour_at(x, y);
     let level = super::background::median(&mut s.to_vec()) as f64;
     let sigma = (mad_sigma(s) as f64).max(1e-9);
     // The streaks the rings found, as straight bands: a ray that crosses one skips it.

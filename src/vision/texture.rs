@@ -200,6 +200,16 @@ impl ClothTexture {
         self.w == img.w && self.h == img.h
     }
 
+    /// The map as a grey picture (128 = 0, the channels summed, 1/2000 per grey level): the
+    /// `STREAKFIT_TEXTURE_PNG` debug hook.
+    pub fn debug_picture(&self) -> image::GrayImage {
+        image::GrayImage::from_fn(self.tw as u32, self.th as u32, |x, y| {
+            let v = self.t[y as usize * self.tw + x as usize];
+            let s = v[0] + v[1] + v[2];
+            image::Luma([(128.0 + 2000.0 * s).clamp(0.0, 255.0) as u8])
+        })
+    }
+
     /// `img` minus the texture (nearest cell), interleaved RGB at full resolution.
     pub fn subtract(&self, img: &RgbImage) -> Vec<f32> {
         let mut out = img.data.clone();
