@@ -37,7 +37,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| black_box(image_io::load(&path).unwrap()))
         });
         g.bench_function("analyse", |b| {
-            b.iter(|| black_box(analyse(&img, Cloth::Surface, &opts)))
+            b.iter(|| black_box(analyse(&img, Cloth::Surface, None, &opts)))
         });
         g.finish();
     }

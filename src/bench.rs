@@ -303,7 +303,7 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             .iter()
             .find(|r| r.get("file") == Some(&j.file))
             .ok_or_else(|| anyhow!("{} has no truth row", j.file))?;
-        images.push((img, plate, texture, t));
+        images.push((img, plate, texture, j.scene.ball_radius_px_cloth(), t));
     }
     let angle = |a: f64, b: f64| ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs();
     let mut rows = Vec::new();
@@ -315,7 +315,7 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
     }
     for (name, opts, is_default) in settings {
         let (mut errs, mut ok, mut secs) = (Vec::new(), 0usize, 0.0);
-        for (img, plate, texture, t) in &images {
+        for (img, plate, texture, scale_r, t) in &images {
             // Best of three runs: other load on the machine only ever adds time; the analysis
             // is deterministic, so every run gives the same numbers.
             let mut best = f64::INFINITY;
@@ -327,7 +327,7 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
                     (None, Some(t)) => Cloth::Texture(t),
                     (None, None) => Cloth::Surface,
                 };
-                let r = analyse(img, cloth, &opts);
+                let r = analyse(img, cloth, *scale_r, &opts);
                 best = best.min(start.elapsed().as_secs_f64());
                 a = Some(r);
             }

@@ -260,7 +260,7 @@ pub fn process(
                 None => texture.map_or(Cloth::Surface, Cloth::Texture),
             };
             let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                analyse(&img, plate_img, opts)
+                analyse(&img, plate_img, job.scene.ball_radius_px_cloth(), opts)
             }));
             match res {
                 Err(_) => ShotRow::failed(

@@ -319,6 +319,7 @@ mod extraction {
         let a = analyse(
             &flat(600, 400, [0.0; 3]),
             Cloth::Surface,
+            None,
             &AnalysisOptions::default(),
         );
         assert_eq!(a.status, Status::Declined);
@@ -326,6 +327,7 @@ mod extraction {
         let a = analyse(
             &flat(600, 400, [1.0; 3]),
             Cloth::Surface,
+            None,
             &AnalysisOptions::default(),
         );
         assert_eq!(a.status, Status::Declined);
@@ -337,12 +339,13 @@ mod extraction {
         let a = analyse(
             &cloth(600, 400),
             Cloth::Surface,
+            None,
             &AnalysisOptions::default(),
         );
         assert_eq!(a.status, Status::Declined, "{}", a.reason);
         let mut one = cloth(600, 400);
         add_disc(&mut one, 300.0, 200.0, 30.0, [0.9, 0.8, 0.2]);
-        let a = analyse(&one, Cloth::Surface, &AnalysisOptions::default());
+        let a = analyse(&one, Cloth::Surface, None, &AnalysisOptions::default());
         assert_eq!(a.status, Status::Declined, "{}", a.reason);
         assert!(a.psi_deg.is_none());
     }
@@ -387,8 +390,8 @@ mod extraction {
         let (a, b) = (image_io::load(&png).unwrap(), image_io::load(&tif).unwrap());
         let opts = AnalysisOptions::default();
         let (ra, rb) = (
-            analyse(&a, Cloth::Surface, &opts),
-            analyse(&b, Cloth::Surface, &opts),
+            analyse(&a, Cloth::Surface, None, &opts),
+            analyse(&b, Cloth::Surface, None, &opts),
         );
         assert_eq!(ra.status, rb.status);
         assert_eq!(ra.status, Status::Ok, "{}", ra.reason);
@@ -416,7 +419,7 @@ mod extraction {
                 }
             }
         }
-        let a = analyse(&img, Cloth::Surface, &AnalysisOptions::default());
+        let a = analyse(&img, Cloth::Surface, None, &AnalysisOptions::default());
         let psi_true: f64 = truth["psi_deg"].parse().unwrap();
         // A third ball's straight streak across the photo, of the cue ball's colour. Until the
         // faint-streak stage (`streak::find_faint`, rays integrated where fewer than three
@@ -434,5 +437,41 @@ mod extraction {
             assert!((v - t).abs() < 3.0 * sd, "{name} {v} ± {sd}, true {t}");
         }
         assert!(psi_true > 0.0);
+    }
+
+    #[test]
+    fn a_bright_spot_is_not_taken_for_the_object_ball_when_the_scale_is_known() {
+        let d = tmp("spot");
+        let (png, truth) = synth_shot(&d);
+        let mut img = image_io::load(&png).unwrap();
+        // A small highlight (a reflection, a chalk mark), brighter than any ball, in a corner
+        // away from the streaks.
+        add_disc(&mut img, 60.0, 60.0, 7.0, [0.97, 0.97, 0.97]);
+        let scene = streakfit::scene::SceneConfig::load(&d).unwrap();
+        let r_scene = scene.for_image(&truth["file"]).ball_radius_px_cloth();
+        assert!(r_scene.is_some(), "the synthetic scene.toml has a scale");
+        let opts = AnalysisOptions::default();
+        let with = analyse(&img, Cloth::Surface, r_scene, &opts);
+        assert_eq!(with.status, Status::Ok, "{}", with.reason);
+        let r_true: f64 = truth["ball_radius_px"].parse().unwrap();
+        assert!((with.ball_radius_px.unwrap() - r_true).abs() < 1.0);
+        for (name, v, sd) in [
+            ("psi", with.psi_deg, with.psi_err_deg),
+            ("theta1", with.theta1_deg, with.theta1_err_deg),
+            ("theta2", with.theta2_deg, with.theta2_err_deg),
+        ] {
+            let t: f64 = truth[&format!("{name}_deg")].parse().unwrap();
+            let (v, sd) = (v.unwrap(), sd.unwrap());
+            assert!((v - t).abs() < 3.0 * sd, "{name} {v} ± {sd}, true {t}");
+        }
+        // Without the scale the spot is the brightest disc, its reading fails, and the next
+        // candidate (the object ball) is read: the same measurement.
+        let without = analyse(&img, Cloth::Surface, None, &opts);
+        assert_eq!(without.status, Status::Ok, "{}", without.reason);
+        assert!((without.psi_deg.unwrap() - with.psi_deg.unwrap()).abs() < 1e-9);
+        // A scale that fits no ball in the photo: declined, naming the sizes.
+        let wrong = analyse(&img, Cloth::Surface, Some(2.0 * r_true), &opts);
+        assert_eq!(wrong.status, Status::Declined);
+        assert!(wrong.reason.contains("scene's size"), "{}", wrong.reason);
     }
 }

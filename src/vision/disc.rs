@@ -67,21 +67,71 @@ fn flood(w: usize, h: usize, seed: usize, inside: impl Fn(usize) -> bool) -> Vec
     out
 }
 
-/// Brightest compact blob on the coarse grid.
-pub fn find_coarse(sig: &Signal) -> Result<CoarseDisc, String> {
+/// Up to `k` compact blobs on the coarse grid, brightest first: after each, the pixels of its
+/// inscribed disc (and a margin of 0.3 of its radius) are masked and the next maximum taken, so
+/// a ball at rest touching another (a stunned cue ball at the impact point, the object ball
+/// stopping next to its waiting place) is a candidate of its own. `Err` when not even one blob
+/// stands 6 σ above the cloth.
+pub fn find_candidates(sig: &Signal, k: usize) -> Result<Vec<CoarseDisc>, String> {
     let (w, h) = (sig.cw, sig.ch);
-    let s = box_blur(&sig.coarse, w, h, 1);
-    let (imax, &m) = s
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .ok_or("empty image")?;
-    if m < 6.0 * sig.sigma_coarse {
-        return Err(format!(
-            "no ball disc found (brightest spot is {:.1} σ above the cloth)",
-            m / sig.sigma_coarse
-        ));
+    let mut s = box_blur(&sig.coarse, w, h, 1);
+    let mut out = Vec::new();
+    while out.len() < k {
+        let (imax, &m) = s
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .ok_or("empty image")?;
+        if m < 6.0 * sig.sigma_coarse {
+            if out.is_empty() {
+                return Err(format!(
+                    "no ball disc found (brightest spot is {:.1} σ above the cloth)",
+                    m / sig.sigma_coarse
+                ));
+            }
+            break;
+        }
+        match blob_at(sig, &s, imax, m) {
+            Ok(c) => {
+                let f = sig.f as f64;
+                let (cx, cy) = (c.cx / f - 0.5, c.cy / f - 0.5);
+                let rr = 1.3 * c.r / f + 1.0;
+                mask_disc(&mut s, w, h, (cx, cy), rr);
+                out.push(c);
+            }
+            Err(e) => {
+                if out.is_empty() {
+                    return Err(e);
+                }
+                break;
+            }
+        }
     }
+    Ok(out)
+}
+
+/// Sets the smoothed signal inside a circle (coarse pixels) to minus infinity.
+fn mask_disc(s: &mut [f32], w: usize, h: usize, c: (f64, f64), rr: f64) {
+    let (x0, x1) = (
+        (c.0 - rr).floor().max(0.0) as usize,
+        (c.0 + rr).ceil().max(0.0) as usize,
+    );
+    let (y0, y1) = (
+        (c.1 - rr).floor().max(0.0) as usize,
+        (c.1 + rr).ceil().max(0.0) as usize,
+    );
+    for y in y0..=y1.min(h - 1) {
+        for x in x0..=x1.min(w - 1) {
+            if (x as f64 - c.0).hypot(y as f64 - c.1) <= rr {
+                s[y * w + x] = f32::NEG_INFINITY;
+            }
+        }
+    }
+}
+
+/// The disc of the blob around the coarse maximum `imax` (value `m`) of the smoothed signal `s`.
+fn blob_at(sig: &Signal, s: &[f32], imax: usize, m: f32) -> Result<CoarseDisc, String> {
+    let (w, h) = (sig.cw, sig.ch);
     let r0 = flood(w, h, imax, |j| s[j] > 0.3 * m);
     let mut vals: Vec<f32> = r0.iter().map(|&j| s[j]).collect();
     let plateau = median(&mut vals);

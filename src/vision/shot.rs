@@ -650,7 +650,40 @@ pub const SIGMA_CALIBRATION: f64 = 2.0;
 pub const PSI_RESOLVED_DEG: f64 = 1.5;
 
 /// Analyses one photo with the given cloth model.
-pub fn analyse(img: &RgbImage, cloth: Cloth, opts: &AnalysisOptions) -> Analysis {
+/// Ratio of a ball's silhouette radius to its radius at the cloth's scale accepted for the object
+/// ball's disc: a ball's centre sits `R` above the ruler's plane, so from a camera at 0.5–1 m it
+/// looks 3–6 % larger; the window also allows for a scale read to a few per cent, tilt and lens
+/// distortion (synthetic sets: 1.01–1.06).
+const DISC_SCALE_RATIO: std::ops::RangeInclusive<f64> = 0.92..=1.15;
+
+/// Typical ratio of a ball's silhouette radius to its radius at the cloth's scale (a camera
+/// 0.75 m above the cloth, as in the paper's set-up).
+const SCALE_LOOKS_LARGER: f64 = 1.04;
+
+/// Edge contrast, relative to the brightest disc of the right size so far, below which a
+/// candidate disc is not read.
+const MIN_DISC_CONTRAST: f64 = 0.2;
+
+/// Edge contrast, in units of the coarse cloth noise, below which a candidate disc is not read
+/// (the significance the coarse blob search asks of its peak).
+const MIN_DISC_SIGMAS: f64 = 6.0;
+
+/// Compact blobs tried as the object ball's waiting disc, brightest first.
+const DISC_CANDIDATES: usize = 4;
+
+/// The whole analysis of one photograph. `scene_radius_px` is the ball radius at the cloth's
+/// scale from `scene.toml` (`ball_diameter_mm`, `px_per_mm`), when known: discs of another size
+/// (a highlight, a smear) are then not taken for the object ball. The brightest disc is read
+/// first; when its reading fails, the next candidates are tried (a stunned cue ball resting at
+/// the impact point or a dark object ball's own resting place can outshine the waiting disc),
+/// and the first reading that measures the shot is kept; otherwise the first size-consistent
+/// candidate's reason is reported.
+pub fn analyse(
+    img: &RgbImage,
+    cloth: Cloth,
+    scene_radius_px: Option<f64>,
+    opts: &AnalysisOptions,
+) -> Analysis {
     let sat = background::saturated_fraction(img);
     let max_sat = opts.max_saturated.unwrap_or(0.05);
     if sat > max_sat {
@@ -663,9 +696,88 @@ pub fn analyse(img: &RgbImage, cloth: Cloth, opts: &AnalysisOptions) -> Analysis
         Ok(s) => s,
         Err(e) => return Analysis::declined(Status::Declined, e),
     };
-    let mut a = match disc::find_coarse(&sig).and_then(|cd| disc::refine(&sig, &cd)) {
-        Ok(dsc) => read_from_disc(&sig, dsc, opts, false),
+    let mut a = match disc::find_candidates(&sig, DISC_CANDIDATES) {
         Err(e) => Analysis::declined(Status::Declined, e),
+        Ok(cands) => {
+            // The first size-consistent reading, else the first refusal, is the one reported.
+            let (mut first, mut refused, mut best_contrast) = (None, None, 0f64);
+            let in_scale = |d: &Disc, rc: f64| DISC_SCALE_RATIO.contains(&(d.r / rc));
+            for cd in &cands {
+                let mut fine = disc::refine(&sig, cd);
+                // A ball close to the cloth's colour shows little more than its highlight, and
+                // a smear widens a blob: when the edge found does not fit the scene's scale, it
+                // is searched again from the scene's size (the search spans 0.75–1.25 of the
+                // starting radius).
+                if let Some(rc) = scene_radius_px
+                    && !fine.as_ref().is_ok_and(|d| in_scale(d, rc))
+                {
+                    let mut c2 = cd.clone();
+                    c2.r = SCALE_LOOKS_LARGER * rc;
+                    if let Ok(d) = disc::refine(&sig, &c2)
+                        && in_scale(&d, rc)
+                    {
+                        fine = Ok(d);
+                    }
+                }
+                let dsc = match fine {
+                    Ok(d) => d,
+                    Err(e) => {
+                        refused.get_or_insert(e);
+                        continue;
+                    }
+                };
+                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                    eprintln!(
+                        "disc candidate coarse ({:.0},{:.0}) r {:.0} -> ({:.1},{:.1}) r {:.1} contrast {:.3} sigma_c {:.4}",
+                        cd.cx, cd.cy, cd.r, dsc.cx, dsc.cy, dsc.r, dsc.contrast, sig.sigma_coarse
+                    );
+                }
+                if let Some(rc) = scene_radius_px
+                    && !in_scale(&dsc, rc)
+                {
+                    refused.get_or_insert(format!(
+                        "no ball disc of the scene's size found (the brightest: radius {:.1} px, \
+                         scene.toml's scale gives {:.1} px at the cloth)",
+                        dsc.r, rc
+                    ));
+                    continue;
+                }
+                // A disc far fainter than the brightest one of the right size is cloth texture
+                // or a streak's edge, refined into a circle only because a size was imposed.
+                // (Measured: waiting discs 7–29 coarse noise sigmas on the hard synthetic tier,
+                // circles imposed on cloth below 1.5.)
+                best_contrast = best_contrast.max(dsc.contrast);
+                if dsc.contrast < MIN_DISC_CONTRAST * best_contrast
+                    || dsc.contrast < MIN_DISC_SIGMAS * sig.sigma_coarse as f64
+                {
+                    refused.get_or_insert(format!(
+                        "no ball disc found (the brightest blob's edge is {:.1} σ above the cloth)",
+                        dsc.contrast / sig.sigma_coarse as f64
+                    ));
+                    continue;
+                }
+                let a = read_from_disc(&sig, dsc, opts, false);
+                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                    eprintln!("disc reading: {:?} {}", a.status, a.reason);
+                }
+                if a.status == Status::Ok {
+                    first = Some(a);
+                    break;
+                }
+                // A reading that found a physical assignment of the streaks tells the user more
+                // than one that did not: its reason is the one reported.
+                let physical = |a: &Analysis| a.streaks.iter().any(|s| s.0 == Role::Incoming);
+                if first.as_ref().is_none_or(|f| physical(&a) && !physical(f)) {
+                    first = Some(a);
+                }
+            }
+            first.unwrap_or_else(|| {
+                Analysis::declined(
+                    Status::Declined,
+                    refused.unwrap_or_else(|| "no ball disc found".into()),
+                )
+            })
+        }
     };
     a.cloth = Some(sig.cloth);
     a
@@ -824,6 +936,12 @@ fn read_from_disc(
         radius: 1.25 * r,
     };
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+    if debug {
+        eprintln!(
+            "disc at ({:.1},{:.1}) r {:.1} contrast {:.3}",
+            o.0, o.1, r, dsc.contrast
+        );
+    }
     let ring = &cands[..cands.len().min(4)];
     let mut tracked = track_candidates(sig, ring, r, ko, opts);
     let mut sel = select_streaks(tracked.clone(), r);
