@@ -6,9 +6,16 @@
 //! seconds`. `cloth_model` says what the cloth was modelled from: `plate` (an empty-table photo),
 //! `texture` (the folder's fixed cloth texture on the photo's own surface) or `surface` (the
 //! photo's own smooth surface only); null when the photo never got that far.
-//! Undefined angles (a ball that stops) are nulls, never numbers.
+//! Undefined angles (a ball that stops) are nulls, never numbers. Positions (`impact_x_px`,
+//! `impact_y_px`) are in pixels from the image's top-left corner, `x` right and `y` down, with
+//! pixel `(i, j)` covering `[i, i + 1) × [j, j + 1)`: its centre is `(i + ½, j + ½)`, the
+//! convention of the synthetic truth tables ([`PIXEL_CENTRE`]).
 
 use serde::{Deserialize, Serialize};
+
+/// Offset from the analysis's coordinates (pixel `i`'s value sampled at `i`) to the table's
+/// (pixel `i` covers `[i, i + 1)`), added where a position enters a row.
+pub const PIXEL_CENTRE: f64 = 0.5;
 
 /// Outcome of one input image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -1287,6 +1287,17 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
             continue;
         }
         let sd = profile_sd(mdl, xs, i, lin.sqrt(), w, settings);
+        if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+            eprintln!(
+                "profile ball {} parabola {} start d-th {:.3}° L0 {:.1} L1 {:.1}: sd {:.3}°",
+                ball + 1,
+                parabola,
+                (xs[i] - xs[i + 1]).to_degrees(),
+                xs[i + 2],
+                xs[i + 3],
+                sd.to_degrees()
+            );
+        }
         if parabola {
             delta_lin[ball] = Some(lin.sqrt());
             cov[(i, i)] = lin.max(sd * sd);

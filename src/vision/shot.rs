@@ -1360,7 +1360,8 @@ fn read_from_disc(
     out.ball_radius_px = Some(fit.r());
     // Table coordinates put pixel centres at half-integers (the image's top-left corner is
     // (0, 0)); internally a pixel's centre is at its integer index.
-    out.impact = Some((fit.impact().0 + 0.5, fit.impact().1 + 0.5));
+    let c = crate::table::PIXEL_CENTRE;
+    out.impact = Some((fit.impact().0 + c, fit.impact().1 + c));
     out.status = Status::Ok;
     if fit.m1.is_none() {
         notes.insert(
