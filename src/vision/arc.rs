@@ -84,22 +84,25 @@ const N_RADII: usize = 8;
 /// A disc with a soft edge of width `w` (a ramp from `R - w/2` to `R + w/2`), as hard radii.
 #[derive(Debug, Clone, Copy)]
 struct Kernel {
-    r: f64,
     rho: [f64; N_RADII],
     /// Their squares.
     rho2: [f64; N_RADII],
     /// Largest radius: a pixel farther than this from a piece is not covered.
     rmax: f64,
+    /// `1/R²` and `1/R` (the shaded and ramp weights).
+    inv_r2: f64,
+    inv_r: f64,
 }
 
 impl Kernel {
     fn new(r: f64, w: f64) -> Kernel {
         let rho = std::array::from_fn(|k| r - 0.5 * w + w * (k as f64 + 0.5) / N_RADII as f64);
         Kernel {
-            r,
             rho,
             rho2: rho.map(|r| r * r),
             rmax: r + 0.5 * w,
+            inv_r2: 1.0 / (r * r),
+            inv_r: 1.0 / r,
         }
     }
 
@@ -189,9 +192,9 @@ impl Prepared {
     ///
     /// A radius whose chord `2h` spans the whole piece (`h ≥ max(x, L - x)`, the common case
     /// for the arc's pieces of a few px) contributes the same amount as every larger radius:
-    /// it is computed once and added without the square root. The test keeps a relative
-    /// margin of 1e-12, so a radius takes the shortcut only where the general formula clamps
-    /// both ends exactly: the sums are the same to the last bit.
+    /// it is added without the square root, and when even the smallest radius spans the piece
+    /// the whole sum is one product. The test keeps a relative margin of 1e-12, so a radius
+    /// takes the shortcut only where the general formula clamps both ends exactly.
     #[inline]
     fn dwell(&self, q: (f64, f64), k: &Kernel) -> Dwell {
         let len = self.len;
@@ -207,13 +210,23 @@ impl Prepared {
             return Dwell::default();
         }
         let wgt = self.dens / N_RADII as f64;
-        let r2 = k.r * k.r;
         let y2 = y * y;
         let t = x.max(len - x);
         let full_above = t * t * (1.0 + 1e-12);
-        let full0 = wgt * len;
-        let full2 = wgt * (y2 * len + (x.powi(3) - (x - len).powi(3)) / 3.0) / r2;
-        let full1 = wgt * 0.5 * (len * len) / k.r;
+        // Sums of the chord's length, its `∫ d²` and its `∫ s` over the radii; the weights
+        // (`wgt`, `1/R²`, `1/R`) are applied once at the end.
+        let full2 = y2 * len + (x.powi(3) - (x - len).powi(3)) / 3.0;
+        let full1 = 0.5 * (len * len);
+        // Inside every radius's reach of both ends (most pixel–piece pairs near the arc):
+        // every radius covers the whole piece.
+        if k.rho2[0] - y2 > full_above {
+            let n = N_RADII as f64;
+            return Dwell {
+                d0: wgt * n * len,
+                d2: wgt * n * full2 * k.inv_r2,
+                ramp: wgt * n * full1 * k.inv_r,
+            };
+        }
         let (mut f0, mut f2, mut f1) = (0.0, 0.0, 0.0);
         for (&rho, &rho2) in k.rho.iter().zip(&k.rho2) {
             if y.abs() >= rho {
@@ -221,7 +234,7 @@ impl Prepared {
             }
             let s = rho2 - y2;
             if s > full_above {
-                f0 += full0;
+                f0 += len;
                 f2 += full2;
                 f1 += full1;
                 continue;
@@ -230,16 +243,16 @@ impl Prepared {
             let lo = (x - h).max(0.0);
             let hi = (x + h).min(len);
             if hi > lo {
-                f0 += wgt * (hi - lo);
+                f0 += hi - lo;
                 let cube = ((x - lo).powi(3) - (x - hi).powi(3)) / 3.0;
-                f2 += wgt * (y2 * (hi - lo) + cube) / r2;
-                f1 += wgt * 0.5 * (hi * hi - lo * lo) / k.r;
+                f2 += y2 * (hi - lo) + cube;
+                f1 += 0.5 * (hi * hi - lo * lo);
             }
         }
         Dwell {
-            d0: f0,
-            d2: f2,
-            ramp: f1,
+            d0: wgt * f0,
+            d2: wgt * f2 * k.inv_r2,
+            ramp: wgt * f1 * k.inv_r,
         }
     }
 }
