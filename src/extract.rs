@@ -259,6 +259,9 @@ pub fn process(
                 Some(Ok(p)) => Cloth::Plate(p.as_ref()),
                 None => texture.map_or(Cloth::Surface, Cloth::Texture),
             };
+            if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                eprintln!("== {}", job.file);
+            }
             let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 analyse(&img, plate_img, job.scene.ball_radius_px_cloth(), opts)
             }));

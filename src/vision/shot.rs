@@ -701,6 +701,8 @@ pub fn analyse(
         Ok(cands) => {
             // The first size-consistent reading, else the first refusal, is the one reported.
             let (mut first, mut refused, mut best_contrast) = (None, None, 0f64);
+            // Discs read so far.
+            let mut read = 0usize;
             let in_scale = |d: &Disc, rc: f64| DISC_SCALE_RATIO.contains(&(d.r / rc));
             for cd in &cands {
                 let mut fine = disc::refine(&sig, cd);
@@ -760,9 +762,18 @@ pub fn analyse(
                 if std::env::var_os("STREAKFIT_DEBUG").is_some() {
                     eprintln!("disc reading: {:?} {}", a.status, a.reason);
                 }
-                if a.status == Status::Ok {
+                // A fainter disc is taken for the object ball only with all three streaks
+                // read: with two, a cue ball resting at the impact point next to the object
+                // ball (a stun shot) reads as a "cue ball stops" shot with the roles swapped
+                // (realistic seed 202: psi 69° off at a stated 0.4°).
+                let three = a.streaks.iter().any(|s| s.0 == Role::CueOut);
+                if a.status == Status::Ok && (read == 0 || three) {
                     first = Some(a);
                     break;
+                }
+                read += 1;
+                if a.status == Status::Ok {
+                    continue;
                 }
                 // A reading that found a physical assignment of the streaks tells the user more
                 // than one that did not: its reason is the one reported.
