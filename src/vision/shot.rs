@@ -1248,6 +1248,7 @@ fn read_from_disc(
     let unresolved = 10f64.to_radians();
     let mut notes: Vec<String> = Vec::new();
     let mut delta1_from_arc = false;
+    let mut arc_rival = false;
     let mut angle = |idx: usize, sd: f64, name: &str| -> (Option<f64>, Option<f64>) {
         let sd = SIGMA_CALIBRATION * sd;
         if sd.is_finite() && sd <= unresolved {
@@ -1309,7 +1310,14 @@ fn read_from_disc(
             }
             // The arc fit states its own honest sigma (correlation and systematic parts).
             let sd = a.delta_sd;
-            if sd <= unresolved {
+            if a.rival {
+                // The pixels near P are the better witness of the start tangent: when they
+                // cannot tell it, the centre-line fit's value (made without them) is no answer
+                // either (realistic rubber shots: 3–14° off at 2–20 stated sigmas).
+                out.delta1_deg = None;
+                out.delta1_err_deg = None;
+                arc_rival = true;
+            } else if sd <= unresolved {
                 out.delta1_deg = Some(deg(m * wrap(a.delta - alpha)));
                 out.delta1_err_deg = Some(deg(sd));
                 delta1_from_arc = true;
@@ -1339,8 +1347,15 @@ fn read_from_disc(
         out.fit = Some(fit);
         return out;
     }
-    if delta1_from_arc {
+    if delta1_from_arc || arc_rival {
         notes.retain(|n| !n.starts_with("delta1"));
+    }
+    if arc_rival {
+        notes.push(format!(
+            "delta1 not resolved (an arc turning {}° more or less fits the light at the impact \
+             nearly as well)",
+            arc::RIVAL_TURN_DEG
+        ));
     }
     // A start tangent belongs to a path whose rolling line is measured: with theta unresolved
     // the sliding arc's end is free, and its start tangent is whatever a few samples suggest
