@@ -38,6 +38,9 @@
 //! Levenberg–Marquardt from the best of a few starts on the measured rolling line. `θ` and `P`
 //! come from the centre-line fit (they are far better determined there). Pixels of the object
 //! ball (its waiting disc and its streak) are left out; outliers beyond 4 MAD are dropped once.
+//! Rivals: the start tangent is held 10° either side of the optimum on a short arc (legs 0.4 R)
+//! and the legs refitted; when a rival's cost is within 25 units of the correlation-widened
+//! residual variance, the turn may hide where the streaks overlap and `δ` is not measured.
 
 use super::background::{Signal, mad_sigma};
 use super::streak::seg_dist2;
