@@ -649,7 +649,6 @@ pub const SIGMA_CALIBRATION: f64 = 2.0;
 /// Largest stated 1-sigma of psi (degrees) for which a shot is reported `ok`.
 pub const PSI_RESOLVED_DEG: f64 = 1.5;
 
-/// Analyses one photo with the given cloth model.
 /// Ratio of a ball's silhouette radius to its radius at the cloth's scale accepted for the object
 /// ball's disc: a ball's centre sits `R` above the ruler's plane, so from a camera at 0.5–1 m it
 /// looks 3–6 % larger; the window also allows for a scale read to a few per cent, tilt and lens
@@ -676,8 +675,7 @@ const DISC_CANDIDATES: usize = 4;
 /// (a highlight, a smear) are then not taken for the object ball. The brightest disc is read
 /// first; when its reading fails, the next candidates are tried (a stunned cue ball resting at
 /// the impact point or a dark object ball's own resting place can outshine the waiting disc),
-/// and the first reading that measures the shot is kept; otherwise the first size-consistent
-/// candidate's reason is reported.
+/// and the first reading that measures the shot is kept ([`read_candidates`]).
 pub fn analyse(
     img: &RgbImage,
     cloth: Cloth,
@@ -698,100 +696,110 @@ pub fn analyse(
     };
     let mut a = match disc::find_candidates(&sig, DISC_CANDIDATES) {
         Err(e) => Analysis::declined(Status::Declined, e),
-        Ok(cands) => {
-            // The first size-consistent reading, else the first refusal, is the one reported.
-            let (mut first, mut refused, mut best_contrast) = (None, None, 0f64);
-            // Discs read so far.
-            let mut read = 0usize;
-            let in_scale = |d: &Disc, rc: f64| DISC_SCALE_RATIO.contains(&(d.r / rc));
-            for cd in &cands {
-                let mut fine = disc::refine(&sig, cd);
-                // A ball close to the cloth's colour shows little more than its highlight, and
-                // a smear widens a blob: when the edge found does not fit the scene's scale, it
-                // is searched again from the scene's size (the search spans 0.75–1.25 of the
-                // starting radius).
-                if let Some(rc) = scene_radius_px
-                    && !fine.as_ref().is_ok_and(|d| in_scale(d, rc))
-                {
-                    let mut c2 = cd.clone();
-                    c2.r = SCALE_LOOKS_LARGER * rc;
-                    if let Ok(d) = disc::refine(&sig, &c2)
-                        && in_scale(&d, rc)
-                    {
-                        fine = Ok(d);
-                    }
-                }
-                let dsc = match fine {
-                    Ok(d) => d,
-                    Err(e) => {
-                        refused.get_or_insert(e);
-                        continue;
-                    }
-                };
-                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-                    eprintln!(
-                        "disc candidate coarse ({:.0},{:.0}) r {:.0} -> ({:.1},{:.1}) r {:.1} contrast {:.3} sigma_c {:.4}",
-                        cd.cx, cd.cy, cd.r, dsc.cx, dsc.cy, dsc.r, dsc.contrast, sig.sigma_coarse
-                    );
-                }
-                if let Some(rc) = scene_radius_px
-                    && !in_scale(&dsc, rc)
-                {
-                    refused.get_or_insert(format!(
-                        "no ball disc of the scene's size found (the brightest: radius {:.1} px, \
-                         scene.toml's scale gives {:.1} px at the cloth)",
-                        dsc.r, rc
-                    ));
-                    continue;
-                }
-                // A disc far fainter than the brightest one of the right size is cloth texture
-                // or a streak's edge, refined into a circle only because a size was imposed.
-                // (Measured: waiting discs 7–29 coarse noise sigmas on the hard synthetic tier,
-                // circles imposed on cloth below 1.5.)
-                best_contrast = best_contrast.max(dsc.contrast);
-                if dsc.contrast < MIN_DISC_CONTRAST * best_contrast
-                    || dsc.contrast < MIN_DISC_SIGMAS * sig.sigma_coarse as f64
-                {
-                    refused.get_or_insert(format!(
-                        "no ball disc found (the brightest blob's edge is {:.1} σ above the cloth)",
-                        dsc.contrast / sig.sigma_coarse as f64
-                    ));
-                    continue;
-                }
-                let a = read_from_disc(&sig, dsc, opts, false);
-                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-                    eprintln!("disc reading: {:?} {}", a.status, a.reason);
-                }
-                // A fainter disc is taken for the object ball only with all three streaks
-                // read: with two, a cue ball resting at the impact point next to the object
-                // ball (a stun shot) reads as a "cue ball stops" shot with the roles swapped
-                // (realistic seed 202: psi 69° off at a stated 0.4°).
-                let three = a.streaks.iter().any(|s| s.0 == Role::CueOut);
-                if a.status == Status::Ok && (read == 0 || three) {
-                    first = Some(a);
-                    break;
-                }
-                read += 1;
-                if a.status == Status::Ok {
-                    continue;
-                }
-                // A reading that found a physical assignment of the streaks tells the user more
-                // than one that did not: its reason is the one reported.
-                let physical = |a: &Analysis| a.streaks.iter().any(|s| s.0 == Role::Incoming);
-                if first.as_ref().is_none_or(|f| physical(&a) && !physical(f)) {
-                    first = Some(a);
-                }
-            }
-            first.unwrap_or_else(|| {
-                Analysis::declined(
-                    Status::Declined,
-                    refused.unwrap_or_else(|| "no ball disc found".into()),
-                )
-            })
-        }
+        Ok(cands) => read_candidates(&sig, &cands, scene_radius_px, opts),
     };
     a.cloth = Some(sig.cloth);
     a
+}
+
+/// The disc of a coarse candidate at full resolution; with the scene's scale known, an edge that
+/// does not fit it is searched again from the scale's size (a ball close to the cloth's colour
+/// shows little more than its highlight, a smear widens a blob; the search spans 0.75–1.25 of
+/// the starting radius), and a disc that still does not fit is refused.
+fn refine_to_scale(
+    sig: &Signal,
+    cd: &disc::CoarseDisc,
+    scene_radius_px: Option<f64>,
+) -> Result<Disc, String> {
+    let in_scale = |d: &Disc, rc: f64| DISC_SCALE_RATIO.contains(&(d.r / rc));
+    let fine = disc::refine(sig, cd);
+    let Some(rc) = scene_radius_px else {
+        return fine;
+    };
+    if fine.as_ref().is_ok_and(|d| in_scale(d, rc)) {
+        return fine;
+    }
+    let mut c2 = cd.clone();
+    c2.r = SCALE_LOOKS_LARGER * rc;
+    match (disc::refine(sig, &c2), fine) {
+        (Ok(d), _) if in_scale(&d, rc) => Ok(d),
+        (_, Ok(d)) => Err(format!(
+            "no ball disc of the scene's size found (the brightest: radius {:.1} px, \
+             scene.toml's scale gives {:.1} px at the cloth)",
+            d.r, rc
+        )),
+        (_, Err(e)) => Err(e),
+    }
+}
+
+/// Reads the scene from the candidate discs in turn (see [`analyse`]). Reported, when none
+/// measures the shot: the first reading that found a physical assignment of the streaks, else the
+/// first reading, else why the first candidate was refused.
+fn read_candidates(
+    sig: &Signal,
+    cands: &[disc::CoarseDisc],
+    scene_radius_px: Option<f64>,
+    opts: &AnalysisOptions,
+) -> Analysis {
+    let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+    let (mut first, mut refused) = (None::<Analysis>, None);
+    let mut best_contrast = 0f64;
+    // Discs read so far.
+    let mut read = 0usize;
+    for cd in cands {
+        let dsc = match refine_to_scale(sig, cd, scene_radius_px) {
+            Ok(d) => d,
+            Err(e) => {
+                refused.get_or_insert(e);
+                continue;
+            }
+        };
+        if debug {
+            eprintln!(
+                "disc candidate coarse ({:.0},{:.0}) r {:.0} -> ({:.1},{:.1}) r {:.1} contrast {:.3} \
+                 sigma_c {:.4}",
+                cd.cx, cd.cy, cd.r, dsc.cx, dsc.cy, dsc.r, dsc.contrast, sig.sigma_coarse
+            );
+        }
+        // A disc far fainter than the brightest one of the right size is cloth texture or a
+        // streak's edge, refined into a circle only because a size was imposed. (Measured:
+        // waiting discs 7–29 coarse noise sigmas on the hard synthetic tier, circles imposed on
+        // cloth below 1.5.)
+        best_contrast = best_contrast.max(dsc.contrast);
+        let sigmas = dsc.contrast / sig.sigma_coarse as f64;
+        if dsc.contrast < MIN_DISC_CONTRAST * best_contrast || sigmas < MIN_DISC_SIGMAS {
+            refused.get_or_insert(format!(
+                "no ball disc found (the brightest blob's edge is {sigmas:.1} σ above the cloth)"
+            ));
+            continue;
+        }
+        let a = read_from_disc(sig, dsc, opts, false);
+        if debug {
+            eprintln!("disc reading: {:?} {}", a.status, a.reason);
+        }
+        // A fainter disc is taken for the object ball only with all three streaks read: with
+        // two, a cue ball resting at the impact point next to the object ball (a stun shot)
+        // reads as a "cue ball stops" shot with the roles swapped (realistic seed 202: psi 69°
+        // off at a stated 0.4°).
+        let three = a.streaks.iter().any(|s| s.0 == Role::CueOut);
+        if a.status == Status::Ok && (read == 0 || three) {
+            return a;
+        }
+        read += 1;
+        if a.status == Status::Ok {
+            continue;
+        }
+        let physical = |a: &Analysis| a.streaks.iter().any(|s| s.0 == Role::Incoming);
+        if first.as_ref().is_none_or(|f| physical(&a) && !physical(f)) {
+            first = Some(a);
+        }
+    }
+    first.unwrap_or_else(|| {
+        Analysis::declined(
+            Status::Declined,
+            refused.unwrap_or_else(|| "no ball disc found".into()),
+        )
+    })
 }
 
 /// Fewest centre-line samples (steps of `R/10`) of a streak found by line integrals.
