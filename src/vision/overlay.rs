@@ -11,7 +11,7 @@ use super::shot::{Analysis, Role};
 use ab_glyph::{FontRef, PxScale};
 use image::{Rgb, RgbImage as Rgb8};
 use imageproc::drawing::{
-    draw_filled_circle_mut, draw_hollow_circle_mut, draw_line_segment_mut, draw_text_mut,
+    draw_filled_circle_mut, draw_hollow_circle_mut, draw_line_segment_mut, draw_text_mut, text_size,
 };
 
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
@@ -47,10 +47,36 @@ fn arrow(img: &mut Rgb8, a: (f64, f64), b: (f64, f64), w: f64, c: Rgb<u8>) {
     }
 }
 
-fn fmt_angle(name: &str, v: Option<f64>, e: Option<f64>) -> String {
+/// `text` broken at spaces into lines no wider than `width` px at font size `fs`; continuation
+/// lines are indented.
+fn wrap(text: &str, width: f32, fs: f32, font: &FontRef) -> Vec<String> {
+    let fits = |t: &str| text_size(PxScale::from(fs), font, t).0 as f32 <= width;
+    let mut out = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        let candidate = if line.is_empty() {
+            word.to_string()
+        } else {
+            format!("{line} {word}")
+        };
+        if fits(&candidate) || line.trim().is_empty() {
+            line = candidate;
+        } else {
+            out.push(line);
+            line = format!("        {word}");
+        }
+    }
+    out.push(line);
+    out
+}
+
+/// An angle with its error; a missing one is "not resolved" when the reason says so (the photo
+/// does not tell it), else "undefined" (a ball that stops has no direction).
+fn fmt_angle(name: &str, v: Option<f64>, e: Option<f64>, reason: &str) -> String {
     match (v, e) {
         (Some(v), Some(e)) => format!("{name} = {v:.3}° ± {e:.3}°"),
         (Some(v), None) => format!("{name} = {v:.3}°"),
+        _ if reason.contains(&format!("{name} not resolved")) => format!("{name}: not resolved"),
         _ => format!("{name}: undefined"),
     }
 }
@@ -162,24 +188,47 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
         let _ = o;
     }
     let fs = (side / 35.0) as f32;
-    let mut lines = vec![
-        title.to_string(),
-        format!("status: {} {}", a.status.as_str(), a.reason),
-    ];
+    let mut lines = vec![title.to_string()];
+    // The status and its reasons, one note per line, wrapped to the photo's width (a reason
+    // runs to a hundred characters, a line of text at this size to about seventy).
+    let width = out.width() as f32 - fs;
+    let notes: Vec<&str> = a.reason.split("; ").filter(|n| !n.is_empty()).collect();
+    let head = format!("status: {}", a.status.as_str());
+    if notes.is_empty() {
+        lines.push(head.clone());
+    }
+    for (i, note) in notes.iter().enumerate() {
+        let first = if i == 0 {
+            format!("{head} {note}")
+        } else {
+            format!("    {note}")
+        };
+        lines.extend(wrap(&first, width, fs, &font));
+    }
     if a.status == crate::table::Status::Ok {
-        lines.push(fmt_angle("psi", a.psi_deg, a.psi_err_deg));
+        lines.push(fmt_angle("psi", a.psi_deg, a.psi_err_deg, &a.reason));
         lines.push(format!(
             "{}   ({})",
-            fmt_angle("delta1", a.delta1_deg, a.delta1_err_deg),
+            fmt_angle("delta1", a.delta1_deg, a.delta1_err_deg, &a.reason),
             a.path_model1.as_deref().unwrap_or("stopped")
         ));
-        lines.push(fmt_angle("theta1", a.theta1_deg, a.theta1_err_deg));
+        lines.push(fmt_angle(
+            "theta1",
+            a.theta1_deg,
+            a.theta1_err_deg,
+            &a.reason,
+        ));
         lines.push(format!(
             "{}   ({})",
-            fmt_angle("delta2", a.delta2_deg, a.delta2_err_deg),
+            fmt_angle("delta2", a.delta2_deg, a.delta2_err_deg, &a.reason),
             a.path_model2.as_deref().unwrap_or("")
         ));
-        lines.push(fmt_angle("theta2", a.theta2_deg, a.theta2_err_deg));
+        lines.push(fmt_angle(
+            "theta2",
+            a.theta2_deg,
+            a.theta2_err_deg,
+            &a.reason,
+        ));
         if let Some(rr) = a.ball_radius_px {
             lines.push(format!("R = {rr:.2} px"));
         }
