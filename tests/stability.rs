@@ -265,7 +265,7 @@ mod extraction {
     use streakfit::synth::{SynthArgs, Tier};
     use streakfit::table::Status;
     use streakfit::vision::image_io::{self, RgbImage};
-    use streakfit::vision::{AnalysisOptions, Cloth, analyse};
+    use streakfit::vision::{Analysis, AnalysisOptions, Cloth, analyse};
 
     fn tmp(name: &str) -> PathBuf {
         let d =
@@ -301,6 +301,19 @@ mod extraction {
                     img.data[i..i + 3].copy_from_slice(&colour);
                 }
             }
+        }
+    }
+
+    /// psi, theta1 and theta2 are measured and within 3 stated sigmas of the truth row.
+    fn assert_within_3_sigma(a: &Analysis, truth: &std::collections::BTreeMap<String, String>) {
+        for (name, v, sd) in [
+            ("psi", a.psi_deg, a.psi_err_deg),
+            ("theta1", a.theta1_deg, a.theta1_err_deg),
+            ("theta2", a.theta2_deg, a.theta2_err_deg),
+        ] {
+            let t: f64 = truth[&format!("{name}_deg")].parse().unwrap();
+            let (v, sd) = (v.unwrap(), sd.unwrap());
+            assert!((v - t).abs() < 3.0 * sd, "{name} {v} ± {sd}, true {t}");
         }
     }
 
@@ -427,15 +440,7 @@ mod extraction {
         // missing streak is found and the stray light is left out of the reading (measured
         // 2026-11-24: psi 35.696° ± 0.064° for 35.650°, theta1 +0.046°, theta2 +0.009°).
         assert_eq!(a.status, Status::Ok, "{}", a.reason);
-        for (name, v, sd) in [
-            ("psi", a.psi_deg, a.psi_err_deg),
-            ("theta1", a.theta1_deg, a.theta1_err_deg),
-            ("theta2", a.theta2_deg, a.theta2_err_deg),
-        ] {
-            let t: f64 = truth[&format!("{name}_deg")].parse().unwrap();
-            let (v, sd) = (v.unwrap(), sd.unwrap());
-            assert!((v - t).abs() < 3.0 * sd, "{name} {v} ± {sd}, true {t}");
-        }
+        assert_within_3_sigma(&a, &truth);
         assert!(psi_true > 0.0);
     }
 
@@ -455,15 +460,7 @@ mod extraction {
         assert_eq!(with.status, Status::Ok, "{}", with.reason);
         let r_true: f64 = truth["ball_radius_px"].parse().unwrap();
         assert!((with.ball_radius_px.unwrap() - r_true).abs() < 1.0);
-        for (name, v, sd) in [
-            ("psi", with.psi_deg, with.psi_err_deg),
-            ("theta1", with.theta1_deg, with.theta1_err_deg),
-            ("theta2", with.theta2_deg, with.theta2_err_deg),
-        ] {
-            let t: f64 = truth[&format!("{name}_deg")].parse().unwrap();
-            let (v, sd) = (v.unwrap(), sd.unwrap());
-            assert!((v - t).abs() < 3.0 * sd, "{name} {v} ± {sd}, true {t}");
-        }
+        assert_within_3_sigma(&with, &truth);
         // Without the scale the spot is the brightest disc, its reading fails, and the next
         // candidate (the object ball) is read: the same measurement.
         let without = analyse(&img, Cloth::Surface, None, &opts);

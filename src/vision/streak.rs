@@ -245,8 +245,8 @@ pub fn find_coarse(map: &CoarseMap, ox: f64, oy: f64) -> Vec<CoarseStreak> {
 
 /// The coarse detection map around one disc: the Mahalanobis norm of the colour difference
 /// box-smoothed over half a ball radius (see [`find_coarse`]), the smoothed channels (for a
-/// streak's colour), and the map's threshold (median + 4 MAD). Computed once per reading and
-/// shared by the ring scan and the faint-streak search.
+/// streak's colour), and the map's level (median), noise (MAD sigma) and threshold (level + 4
+/// noise). Computed once per reading and shared by the ring scan and the faint-streak search.
 pub struct CoarseMap {
     w: usize,
     h: usize,
@@ -255,6 +255,8 @@ pub struct CoarseMap {
     rc: f64,
     s: Vec<f32>,
     chans: Vec<Vec<f32>>,
+    level: f32,
+    noise: f32,
     thr: f32,
     /// The photo's mean ball colour direction (a crossing's colour when it has none).
     u: [f32; 3],
@@ -265,7 +267,9 @@ impl CoarseMap {
     pub fn new(sig: &Signal, r: f64) -> CoarseMap {
         let f = sig.f as f64;
         let rc = r / f;
-        let (s, chans, thr) = norm_map(sig, rc);
+        let (s, chans) = norm_map(sig, rc);
+        let level = super::background::median(&mut s.clone());
+        let noise = mad_sigma(&s);
         CoarseMap {
             w: sig.cw,
             h: sig.ch,
@@ -273,7 +277,9 @@ impl CoarseMap {
             rc,
             s,
             chans,
-            thr,
+            level,
+            noise,
+            thr: level + 4.0 * noise.max(1e-7),
             u: sig.u,
         }
     }
@@ -288,7 +294,8 @@ impl CoarseMap {
     }
 }
 
-fn norm_map(sig: &Signal, rc: f64) -> (Vec<f32>, Vec<Vec<f32>>, f32) {
+/// The Mahalanobis norm map and the box-smoothed channels it is made of.
+fn norm_map(sig: &Signal, rc: f64) -> (Vec<f32>, Vec<Vec<f32>>) {
     let (w, h) = (sig.cw, sig.ch);
     let rb = ((rc / 2.0).round() as usize).max(1);
     // Detection works on every ball colour: the Mahalanobis norm of the smoothed colour
@@ -316,12 +323,7 @@ fn norm_map(sig: &Signal, rc: f64) -> (Vec<f32>, Vec<Vec<f32>>, f32) {
             q.max(0.0).sqrt() as f32
         })
         .collect();
-    let thr = {
-        let mut t = s.clone();
-        let m = super::background::median(&mut t);
-        m + 4.0 * mad_sigma(&s).max(1e-7)
-    };
-    (s, chans, thr)
+    (s, chans)
 }
 
 /// Faint streaks that no ring caught (see [`ray_candidates`]), in directions away from the ring
@@ -342,7 +344,7 @@ pub fn find_faint(map: &CoarseMap, ox: f64, oy: f64, ring: &[CoarseStreak]) -> V
         .collect();
     ray_candidates(map, (ocx, ocy), &taken)
         .into_iter()
-        .map(|(_, c)| CoarseStreak {
+        .map(|c| CoarseStreak {
             seed: ((c.seed.0 + 0.5) * f, (c.seed.1 + 0.5) * f),
             ..c
         })
@@ -371,11 +373,11 @@ const RAY_SIGNIFICANCE: f64 = 4.5;
 /// filter of a streak of unknown length; `level` the map's median) in units of `σ_s`. One
 /// candidate per run of directions above [`RAY_SIGNIFICANCE`]: the seed where the run's best ray
 /// crosses `4R`, the ray's direction, and the colour of its light.
-fn ray_candidates(map: &CoarseMap, o: (f64, f64), taken: &[Band]) -> Vec<(f64, CoarseStreak)> {
+fn ray_candidates(map: &CoarseMap, o: (f64, f64), taken: &[Band]) -> Vec<CoarseStreak> {
     let (s, w, h, rc) = (&map.s[..], map.w, map.h, map.rc);
     let colour_at = |x: f64, y: f64| map.colour_at(x, y);
-    let level = super::background::median(&mut s.to_vec()) as f64;
-    let sigma = (mad_sigma(s) as f64).max(1e-9);
+    let level = map.level as f64;
+    let sigma = (map.noise as f64).max(1e-9);
     // The streaks the rings found, as straight bands: a ray that crosses one skips it.
     let in_band = |x: f64, y: f64| {
         taken.iter().any(|b| {
@@ -486,16 +488,13 @@ fn ray_candidates(map: &CoarseMap, o: (f64, f64), taken: &[Band]) -> Vec<(f64, C
             }
             let cn = (col[0] * col[0] + col[1] * col[1] + col[2] * col[2]).sqrt();
             if cn > 0.0 && at(seed.0, seed.1).is_some() {
-                out.push((
-                    (seed.1 - o.1).atan2(seed.0 - o.0),
-                    CoarseStreak {
-                        seed,
-                        dir: d,
-                        weight: 0.0,
-                        u: col.map(|v| (v / cn) as f32),
-                        faint: true,
-                    },
-                ));
+                out.push(CoarseStreak {
+                    seed,
+                    dir: d,
+                    weight: 0.0,
+                    u: col.map(|v| (v / cn) as f32),
+                    faint: true,
+                });
             }
         }
         run.clear();
