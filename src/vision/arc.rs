@@ -732,10 +732,11 @@ const MIN_ARC_R: f64 = 0.25;
 const STEPS: [f64; 3] = [1e-3, 0.05, 0.05];
 
 /// A step smaller than this in `δ` (rad, 0.003°) and in both legs (px) ends the fit. Near the
-/// optimum the convergence is only linear (each step some 0.3–0.7 of the previous one; probably
-/// the rough finite-difference Jacobian of hard-radius chords inflating `JᵀJ` along the valley
-/// where `δ` and `L₀` trade off: 4–6× larger steps did not make it quadratic), and the fits ran
-/// 10–15 steps, the last ones of 1e-5 rad and less. The
+/// optimum the convergence is only linear (each step some 0.3–0.7 of the previous one, along
+/// the valley where `δ` and `L₀` trade off; neither central differences nor 4–6× larger
+/// finite-difference steps made it quadratic: likely the large residual (cloth texture the
+/// model does not hold), whose curvature Gauss–Newton leaves out), and the fits ran 10–15
+/// steps, the last ones of 1e-5 rad and less. The
 /// 2–3× step left is ≪ the statistical 0.03–0.1° of `δ`: on the accuracy sets `δ` moved by at
 /// most 0.008°, and with the photo's pixels borrowed instead of copied ([`Signal::rgb`]) the
 /// analysis of a photo took 12–26 % less time (`cargo bench --bench extract`).
