@@ -153,8 +153,8 @@ fn clean_tier_accuracy() {
     assert!(m("theta2") < 0.6, "theta2 median error {}", m("theta2"));
     // Stated sigmas of psi and theta (`vision::shot::calibrated_sd`): measured 1.72 on these 17
     // angles (2026-11-24; honest Gaussian errors give 0.67, and 24 shots of the same size give
-    // sigma ratios 0.9–1.5, see the README); the bounds fail when the sigmas shrink by a third
-    // more or grow eightfold (a lost systematic part, a unit slip).
+    // sigma ratios 0.9–1.5, see the README); the bounds fail when the sigmas fall to two thirds
+    // of today's or grow eightfold (a lost systematic part, a unit slip).
     assert!(
         (0.2..2.5).contains(&m("pull")),
         "median |error| / sigma {}",

@@ -734,12 +734,12 @@ const STEPS: [f64; 3] = [1e-3, 0.05, 0.05];
 /// A step smaller than this in `δ` (rad, 0.003°) and in both legs (px) ends the fit. Near the
 /// optimum the convergence is only linear (each step some 0.3–0.7 of the previous one, along
 /// the valley where `δ` and `L₀` trade off; neither central differences nor 4–6× larger
-/// finite-difference steps made it quadratic: likely the large residual (cloth texture the
-/// model does not hold), whose curvature Gauss–Newton leaves out), and the fits ran 10–15
-/// steps, the last ones of 1e-5 rad and less. The
-/// 2–3× step left is ≪ the statistical 0.03–0.1° of `δ`: on the accuracy sets `δ` moved by at
-/// most 0.008°, and with the photo's pixels borrowed instead of copied ([`Signal::rgb`]) the
-/// analysis of a photo took 12–26 % less time (`cargo bench --bench extract`).
+/// finite-difference steps made it quadratic: likely the large residual, cloth texture the
+/// model does not hold, whose curvature Gauss–Newton leaves out), and the fits ran 10–15
+/// steps, the last ones of 1e-5 rad and less. The 2–3× step left is ≪ the statistical
+/// 0.03–0.1° of `δ`: on the accuracy sets `δ` moved by at most 0.008°, and with the photo's
+/// pixels borrowed instead of copied ([`Signal::rgb`]) the analysis of a photo took 12–26 % less
+/// time (`cargo bench --bench extract`).
 const CONVERGED_DELTA: f64 = 5e-5;
 const CONVERGED_LEG: f64 = 0.02;
 

@@ -639,7 +639,7 @@ const HIDDEN_PATH_PSI_MIN_DEG: f64 = 12.0;
 const OBJECT_THROW_MAX_DEG: f64 = 35.0;
 
 /// Stated 1-sigma of an angle from the path fit's standard error `sd` (radians):
-/// `√((SIGMA_SCALE · sd)² + SIGMA_FLOOR²)`. The covariance counts correlated centre-line
+/// `√((SIGMA_SCALE · sd)² + SIGMA_FLOOR_DEG²)`. The covariance counts correlated centre-line
 /// samples through their measured autocorrelation, but errors shared by a whole streak (cloth
 /// blotches at the scale of the ball, the impact point's offset, lens distortion) are
 /// under-counted, and they do not grow with the photo's noise: a single factor (2, until session
