@@ -77,14 +77,26 @@ pub struct Model {
     pub label: String,
     pub coeffs: Coefficients,
     pub choice: RegimeChoice,
+    /// Which of `e, mu, mu_table, mu_static` the data did not determine (drawn with the paper's
+    /// value or a default): marked in the legend, so that a curve is not read as fitted there.
+    pub assumed: [bool; 4],
 }
 
 impl Model {
     fn describe(&self) -> String {
         let c = &self.coeffs;
-        let mut s = format!("e={:.2}, μ={:.2}, μ'={:.2}", c.e, c.mu, c.mu_table);
+        let mark = |i: usize| if self.assumed[i] { " (not fitted)" } else { "" };
+        let mut s = format!(
+            "e={:.2}{}, μ={:.2}{}, μ'={:.2}{}",
+            c.e,
+            mark(0),
+            c.mu,
+            mark(1),
+            c.mu_table,
+            mark(2)
+        );
         if (c.mu_static - c.mu).abs() > 1e-12 {
-            s.push_str(&format!(", μ0={:.2}", c.mu_static));
+            s.push_str(&format!(", μ0={:.2}{}", c.mu_static, mark(3)));
         }
         s
     }
@@ -1224,6 +1236,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn legend_marks_the_coefficients_the_fit_did_not_determine() {
+        let m = Model {
+            label: "fit".into(),
+            coeffs: Coefficients::new(0.88, 0.6, 0.55).with_static(0.7),
+            choice: RegimeChoice::Auto,
+            assumed: [false, false, true, false],
+        };
+        assert_eq!(
+            m.legend(),
+            "fit (e=0.88, μ=0.60, μ'=0.55 (not fitted), μ0=0.70)"
+        );
+        let all = Model {
+            assumed: [false; 4],
+            ..m
+        };
+        assert_eq!(all.legend(), "fit (e=0.88, μ=0.60, μ'=0.55, μ0=0.70)");
+    }
+
+    #[test]
     fn wrap_keeps_differences_in_half_open_interval() {
         assert!((wrap_deg(350.0) + 10.0).abs() < 1e-12);
         assert!((wrap_deg(-190.0) - 170.0).abs() < 1e-12);
@@ -1289,6 +1320,7 @@ mod render_tests {
                     label: "paper".into(),
                     coeffs: mat.coefficients(),
                     choice: RegimeChoice::Auto,
+                    assumed: [false; 4],
                 }),
                 template: Shot::rolling(0.0),
                 radius_m: mat.radius_m(),

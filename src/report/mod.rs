@@ -266,11 +266,13 @@ pub fn material_inputs(input: &ReportInput) -> Vec<MaterialFigures> {
                     label: "fit".into(),
                     coeffs: f.coeffs,
                     choice: f.choice,
+                    assumed: f.fitted.map(|b| !b),
                 }),
                 paper: preset.map(|p| Model {
                     label: "paper".into(),
                     coeffs: p.coefficients(),
                     choice: RegimeChoice::Auto,
+                    assumed: [false; 4],
                 }),
                 template,
                 radius_m: preset.map(|p| p.radius_m()).unwrap_or(0.028575),
