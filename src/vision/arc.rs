@@ -684,7 +684,9 @@ const SYSTEMATIC_DELTA_NO_PLATE_DEG: f64 = 0.6;
 /// pixel count, `s²` the residual variance (1 for independent pixels).
 fn correlation_factor(px: &Pixels, res: &[f64], keep: &[bool], r: f64) -> f64 {
     let side = (0.5 * r).max(4.0);
-    let mut blocks: std::collections::HashMap<(i64, i64), (f64, usize)> = Default::default();
+    // Ordered, so that the sum below is the same to the last bit on every run (a hash map's
+    // iteration order is random per instance).
+    let mut blocks: std::collections::BTreeMap<(i64, i64), (f64, usize)> = Default::default();
     let (mut ss, mut n) = (0.0, 0usize);
     for i in 0..px.q.len() {
         if !keep[i] {
@@ -792,7 +794,8 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
     if n <= np + 10 {
         return None;
     }
-    let s2 = cost(&res, keep) / (n - np) as f64;
+    let c0 = cost(&res, keep);
+    let s2 = c0 / (n - np) as f64;
     let mut jtj = DMatrix::<f64>::zeros(np, np);
     let mut dcols: [Vec<Dwell>; 3] = Default::default();
     for (k, col) in dcols.iter_mut().enumerate() {
@@ -822,7 +825,8 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
     }
     let scale = symmetrise_and_scale(&mut jtj);
     let cov = jtj.try_inverse()?;
-    let var = s2 * correlation_factor(&px, &res, keep, g.r) * cov[(0, 0)] / (scale[0] * scale[0]);
+    let f = correlation_factor(&px, &res, keep, g.r);
+    let var = s2 * f * cov[(0, 0)] / (scale[0] * scale[0]);
     if !(var.is_finite() && var > 0.0) {
         return None;
     }
@@ -831,8 +835,6 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
     // overlap (a short slide on a high-friction cloth). Then the start tangent is not measured,
     // whatever the curvature at the optimum says. (Starting the rivals from the optimum's own
     // legs as well flagged good arcs too: realistic shot_020, 0.08° off.)
-    let f = correlation_factor(&px, &res, keep, g.r);
-    let c0 = cost(&res, keep);
     let leg = RIVAL_LEG_R * g.r;
     let rival = [-1.0, 1.0]
         .into_iter()

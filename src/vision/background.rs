@@ -145,11 +145,13 @@ pub fn median(v: &mut [f32]) -> f32 {
 
 /// Robust sigma: 1.4826 × median absolute deviation from the median.
 pub fn mad_sigma(v: &[f32]) -> f32 {
-    let mut a = v.to_vec();
-    let m = median(&mut a);
-    for x in &mut a {
-        *x = (*x - m).abs();
-    }
+    let m = median(&mut v.to_vec());
+    mad_sigma_about(v, m)
+}
+
+/// [`mad_sigma`] about a centre `m` already known (the median, when the caller has it).
+pub fn mad_sigma_about(v: &[f32], m: f32) -> f32 {
+    let mut a: Vec<f32> = v.iter().map(|x| (x - m).abs()).collect();
     1.4826 * median(&mut a)
 }
 

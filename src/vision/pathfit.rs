@@ -124,6 +124,12 @@ struct DistGrad {
     path: [f64; 4],
 }
 
+/// The Bézier legs `(L₀, L₁)` of a `parabola+line` path's parameters `[δ, θ, L₀, L₁, …]`: the
+/// lengths are `|L| + 0.5` px, so the start tangent never loses its meaning.
+pub fn legs(p: &[f64]) -> (f64, f64) {
+    (p[2].abs() + 0.5, p[3].abs() + 0.5)
+}
+
 /// Geometry of one outgoing path in image coordinates.
 #[derive(Debug, Clone, Copy)]
 pub struct PathGeom {
@@ -154,8 +160,7 @@ impl PathGeom {
             PathModel::ParabolaLine => {
                 let u0 = unit(alpha + p[0]);
                 let u1 = unit(alpha + p[1]);
-                // Lengths are |L| + 0.5 px so the start tangent never loses its meaning.
-                let (l0, l1) = (p[2].abs() + 0.5, p[3].abs() + 0.5);
+                let (l0, l1) = legs(p);
                 let ctrl = (start.0 + l0 * u0.0, start.1 + l0 * u0.1);
                 let end = (ctrl.0 + l1 * u1.0, ctrl.1 + l1 * u1.1);
                 Self {

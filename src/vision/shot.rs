@@ -1382,8 +1382,8 @@ fn read_from_disc(
     // start speed: a fitted slide that ends far slower is the centre-line's kink where a slide
     // hidden under the disc ends, and its start tangent is not measured.
     if fit.m2 == pathfit::PathModel::ParabolaLine && out.delta2_deg.is_some() {
-        let p = &fit.params[fit.ball2_offset()..];
-        let ratio = (p[3].abs() + 0.5) / (p[2].abs() + 0.5);
+        let (l0, l1) = pathfit::legs(&fit.params[fit.ball2_offset()..]);
+        let ratio = l1 / l0;
         if ratio < OBJECT_SLIDE_END_MIN {
             out.delta2_deg = None;
             out.delta2_err_deg = None;

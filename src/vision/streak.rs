@@ -12,7 +12,7 @@
 //! centre-line (sweep `∝ sqrt(R² - d²)`, shaded `∝ R² - d²`, blur) this is unbiased; its standard
 //! error is `σ_c² = Σ (t - c)² σ_n² / (Σ s)²` with `σ_n` the flank scatter.
 
-use super::background::{Signal, box_blur, mad_sigma};
+use super::background::{Signal, box_blur, mad_sigma, mad_sigma_about};
 
 #[derive(Debug, Clone)]
 pub struct CoarseStreak {
@@ -269,7 +269,7 @@ impl CoarseMap {
         let rc = r / f;
         let (s, chans) = norm_map(sig, rc);
         let level = super::background::median(&mut s.clone());
-        let noise = mad_sigma(&s);
+        let noise = mad_sigma_about(&s, level);
         CoarseMap {
             w: sig.cw,
             h: sig.ch,
