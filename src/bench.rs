@@ -3,13 +3,18 @@
 //! On a pinned (seeded) synthetic set with ground truth, every cost knob of a stage is swept and
 //! each setting's seconds per item and angle errors are recorded:
 //! - `extract`: the extractor's knobs ([`crate::vision::AnalysisOptions::speed_settings`]), seconds
-//!   per image (decode excluded, one thread) against |error| of `psi, delta, theta` pooled;
+//!   per image (decode excluded, one thread) against |error| of the angles that the default
+//!   setting measures, an angle a setting leaves unmeasured counting as infinitely wrong: the
+//!   `median_err_deg` and `p90_err_deg` of this stage are the means over `psi, delta1, delta2,
+//!   theta1, theta2` of each angle's median and 90th percentile (angles with at least
+//!   [`MIN_ANGLE_READINGS`] readings), and `median_err_sd_deg` the former's sampling noise
+//!   (bootstrap over the images);
 //! - `theory`: closed forms against the impulse model (the reference), seconds per evaluation;
 //! - `fit`: seconds per fit of `n` shots against |e - e_true|, known and estimated spin.
 //!
 //! Writes `OUT/speed_error.csv` (`stage, setting, is_default, seconds_per_item, median_err_deg,
-//! p90_err_deg, ok_fraction, n_items, on_pareto_front`) and a Pareto plot `OUT/pareto.png|svg`
-//! (time against median error per stage, default marked).
+//! median_err_sd_deg, p90_err_deg, ok_fraction, n_items, on_pareto_front`) and a Pareto plot
+//! `OUT/pareto.png|svg` (time against median error per stage, default marked).
 
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::physics::{Coefficients, RegimeChoice, Shot, closed, impulse};
@@ -61,6 +66,9 @@ pub struct BenchRow {
     pub is_default: bool,
     pub seconds_per_item: f64,
     pub median_err_deg: f64,
+    /// Sampling noise of `median_err_deg` (bootstrap over the items; 0 where the items are
+    /// not a sample, as for the theory's exact comparison).
+    pub median_err_sd: f64,
     pub p90_err_deg: f64,
     pub ok_fraction: f64,
     pub n_items: usize,
@@ -76,30 +84,100 @@ pub fn quantile(v: &[f64], q: f64) -> f64 {
     s.sort_by(f64::total_cmp);
     let pos = q.clamp(0.0, 1.0) * (s.len() - 1) as f64;
     let (i, f) = (pos.floor() as usize, pos.fract());
-    if i + 1 < s.len() {
+    if i + 1 < s.len() && f > 0.0 && s[i + 1].is_finite() {
         s[i] * (1.0 - f) + s[i + 1] * f
+    } else if i + 1 < s.len() && f > 0.0 {
+        // Interpolating towards a lost angle (infinite error) is infinite.
+        f64::INFINITY
     } else {
         s[i]
     }
 }
 
+/// Standard deviation of `stat` when the items are resampled with replacement (`n` bootstrap
+/// draws, seeded): the sampling noise of the statistic itself. Infinite when most draws give an
+/// infinite statistic.
+pub fn bootstrap_sd<T>(items: &[T], n: usize, seed: u64, stat: impl Fn(&[&T]) -> f64) -> f64 {
+    if items.is_empty() {
+        return f64::NAN;
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let vals: Vec<f64> = (0..n)
+        .map(|_| {
+            let draw: Vec<&T> = (0..items.len())
+                .map(|_| &items[rng.gen_range(0..items.len())])
+                .collect();
+            stat(&draw)
+        })
+        .filter(|v| v.is_finite())
+        .collect();
+    if vals.len() < n / 2 {
+        return f64::INFINITY;
+    }
+    // (NaN draws, a statistic undefined on that resample, were dropped with the infinite ones.)
+    let mean = vals.iter().sum::<f64>() / vals.len() as f64;
+    (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (vals.len() - 1).max(1) as f64).sqrt()
+}
+
+/// One image's errors of `psi, delta1, delta2, theta1, theta2` (`None`: not a reference angle,
+/// infinite: a reference angle the setting did not measure).
+type AngleErrors = [Option<f64>; 5];
+
+/// Fewest reference readings of an angle for its quantile to enter [`angle_score`]: the object
+/// ball's `delta2` is measured on two or three photos of a realistic set, too few for a median
+/// that means anything (one lost reading made it infinite, one resampling dropped it).
+pub const MIN_ANGLE_READINGS: usize = 5;
+
+/// The angles (indices into [`AngleErrors`]) with at least [`MIN_ANGLE_READINGS`] readings.
+pub fn scored_angles(images: &[&AngleErrors]) -> Vec<usize> {
+    (0..5)
+        .filter(|&k| images.iter().filter(|a| a[k].is_some()).count() >= MIN_ANGLE_READINGS)
+        .collect()
+}
+
+/// The mean over the angles `kinds` (of `psi, delta1, delta2, theta1, theta2`) of each angle's
+/// `q`-quantile of |error| over the images: each angle weighs the same however many images
+/// measure it (pooled, psi and theta, three fifths of the readings and the most accurate, hid
+/// what a knob did to `delta1`). NaN when an angle has no reading (a bootstrap draw without
+/// it).
+pub fn angle_score(images: &[&AngleErrors], kinds: &[usize], q: f64) -> f64 {
+    if kinds.is_empty() {
+        return f64::NAN;
+    }
+    kinds
+        .iter()
+        .map(|&k| {
+            let e: Vec<f64> = images.iter().filter_map(|a| a[k]).collect();
+            quantile(&e, q)
+        })
+        .sum::<f64>()
+        / kinds.len() as f64
+}
+
 /// Relative differences of seconds per item below this are timing noise: repeated runs of the
 /// same extractor setting on this 2-core machine differ by 5–20 %.
 pub const TIME_TOLERANCE: f64 = 0.05;
-/// Relative differences of median error below this are not an improvement.
+/// Relative differences of median error below this are not an improvement (the theory's and
+/// the fit's comparisons; the extraction's medians come with their own sampling noise).
 pub const ERROR_TOLERANCE: f64 = 0.01;
+/// Bootstrap draws for the sampling noise of a median error.
+pub const BOOTSTRAP_DRAWS: usize = 400;
 
 /// Marks the rows of each stage that no other row of the stage beats. A row beats another if it
 /// measures at least as many items and is clearly faster (by more than [`TIME_TOLERANCE`]) and not
-/// less accurate, or clearly more accurate (by more than [`ERROR_TOLERANCE`]) and not clearly
-/// slower: ε-dominance, so that timing noise alone moves no setting off the front.
+/// less accurate, or clearly more accurate (by more than [`ERROR_TOLERANCE`] and the two
+/// medians' combined sampling noise) and not clearly slower: ε-dominance, so that timing or
+/// sampling noise alone moves no setting off the front.
 pub fn mark_pareto(rows: &mut [BenchRow]) {
     let snapshot = rows.to_vec();
     let beats = |o: &BenchRow, r: &BenchRow| {
         let faster = o.seconds_per_item < r.seconds_per_item * (1.0 - TIME_TOLERANCE);
         let not_slower = o.seconds_per_item <= r.seconds_per_item * (1.0 + TIME_TOLERANCE);
-        let more_accurate = o.median_err_deg < r.median_err_deg * (1.0 - ERROR_TOLERANCE);
-        let not_less_accurate = o.median_err_deg <= r.median_err_deg;
+        // A difference of medians within their combined sampling noise is no difference.
+        let noise = o.median_err_sd.hypot(r.median_err_sd);
+        let noise = if noise.is_finite() { noise } else { 0.0 };
+        let more_accurate = o.median_err_deg < r.median_err_deg * (1.0 - ERROR_TOLERANCE) - noise;
+        let not_less_accurate = o.median_err_deg <= r.median_err_deg + noise;
         (faster && not_less_accurate) || (more_accurate && not_slower)
     };
     for r in rows.iter_mut() {
@@ -182,6 +260,7 @@ pub fn theory_rows(n: usize, seed: u64) -> Vec<BenchRow> {
             is_default: default,
             seconds_per_item: time(f),
             median_err_deg: quantile(&e, 0.5),
+            median_err_sd: 0.0,
             p90_err_deg: quantile(&e, 0.9),
             ok_fraction: 1.0,
             n_items: n,
@@ -248,6 +327,9 @@ pub fn fit_rows(seed: u64) -> Result<Vec<BenchRow>> {
                 is_default: n == 30 && mode == SpinMode::Known,
                 seconds_per_item: secs,
                 median_err_deg: quantile(&errs, 0.5),
+                median_err_sd: bootstrap_sd(&errs, BOOTSTRAP_DRAWS, seed, |d| {
+                    quantile(&d.iter().map(|e| **e).collect::<Vec<_>>(), 0.5)
+                }),
                 p90_err_deg: quantile(&errs, 0.9),
                 ok_fraction: 1.0,
                 n_items: n,
@@ -306,16 +388,25 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
         images.push((img, plate, texture, j.scene.ball_radius_px_cloth(), t));
     }
     let angle = |a: f64, b: f64| ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs();
-    let mut rows = Vec::new();
+    const KEYS: [&str; 5] = [
+        "psi_deg",
+        "delta1_deg",
+        "delta2_deg",
+        "theta1_deg",
+        "theta2_deg",
+    ];
     // The default is measured first and again last (the best time kept), so warm-up of the
     // machine does not count against the setting every other one is compared with.
     let mut settings = extract_settings();
     if let Some(d) = settings.iter().find(|s| s.2).cloned() {
         settings.push(d);
     }
+    // Per setting: seconds, ok count and each image's five readings (None: not measured).
+    type Readings = Vec<[Option<f64>; 5]>;
+    let mut runs: Vec<(String, bool, f64, usize, Readings)> = Vec::new();
     for (name, opts, is_default) in settings {
-        let (mut errs, mut ok, mut secs) = (Vec::new(), 0usize, 0.0);
-        for (img, plate, texture, scale_r, t) in &images {
+        let (mut ok, mut secs, mut readings) = (0usize, 0.0, Vec::new());
+        for (img, plate, texture, scale_r, _) in &images {
             // Best of three runs: other load on the machine only ever adds time; the analysis
             // is deterministic, so every run gives the same numbers.
             let mut best = f64::INFINITY;
@@ -333,41 +424,76 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             }
             secs += best;
             let a = a.expect("three runs");
-            if a.status != crate::table::Status::Ok {
-                continue;
-            }
-            ok += 1;
-            let measured = [
-                a.psi_deg,
-                a.delta1_deg,
-                a.delta2_deg,
-                a.theta1_deg,
-                a.theta2_deg,
-            ];
-            for (m, key) in measured.iter().zip([
-                "psi_deg",
-                "delta1_deg",
-                "delta2_deg",
-                "theta1_deg",
-                "theta2_deg",
-            ]) {
-                if let (Some(m), Some(Ok(tv))) = (m, t.get(key).map(|v| v.parse::<f64>())) {
-                    errs.push(angle(*m, tv));
-                }
-            }
+            let is_ok = a.status == crate::table::Status::Ok;
+            ok += usize::from(is_ok);
+            readings.push(if is_ok {
+                [
+                    a.psi_deg,
+                    a.delta1_deg,
+                    a.delta2_deg,
+                    a.theta1_deg,
+                    a.theta2_deg,
+                ]
+            } else {
+                [None; 5]
+            });
         }
         let secs_per_item = secs / images.len().max(1) as f64;
-        if let Some(prev) = rows.iter_mut().find(|r: &&mut BenchRow| r.setting == name) {
-            prev.seconds_per_item = prev.seconds_per_item.min(secs_per_item);
+        if let Some(prev) = runs.iter_mut().find(|r| r.0 == name) {
+            prev.2 = prev.2.min(secs_per_item);
             continue;
         }
+        runs.push((name, is_default, secs_per_item, ok, readings));
+    }
+    // The angles the default measures (and the truth defines) are the reference: a setting is
+    // scored on those, and one it does not measure counts as lost (infinite error). Scoring
+    // whatever each setting reports instead let a setting that leaves the hardest angle
+    // unmeasured look more accurate (without the arc fit, delta1 is mostly unresolved).
+    let truth_of =
+        |i: usize, k: usize| images[i].4.get(KEYS[k]).and_then(|v| v.parse::<f64>().ok());
+    let reference: Vec<Vec<usize>> = runs
+        .iter()
+        .find(|r| r.1)
+        .map(|d| {
+            (0..images.len())
+                .map(|i| {
+                    (0..5)
+                        .filter(|&k| d.4[i][k].is_some() && truth_of(i, k).is_some())
+                        .collect()
+                })
+                .collect()
+        })
+        .ok_or_else(|| anyhow!("no default extraction setting"))?;
+    let mut rows = Vec::new();
+    for (name, is_default, secs_per_item, ok, readings) in runs {
+        let per_image: Vec<AngleErrors> = reference
+            .iter()
+            .enumerate()
+            .map(|(i, ks)| {
+                let mut e = [None; 5];
+                for &k in ks {
+                    e[k] = Some(match (readings[i][k], truth_of(i, k)) {
+                        (Some(m), Some(t)) => angle(m, t),
+                        _ => f64::INFINITY,
+                    });
+                }
+                e
+            })
+            .collect();
+        let all: Vec<&AngleErrors> = per_image.iter().collect();
+        // The same angles for every setting and every resample: those the default measures
+        // often enough.
+        let kinds = scored_angles(&all);
         rows.push(BenchRow {
             stage: "extract".into(),
             setting: name,
             is_default,
             seconds_per_item: secs_per_item,
-            median_err_deg: quantile(&errs, 0.5),
-            p90_err_deg: quantile(&errs, 0.9),
+            median_err_deg: angle_score(&all, &kinds, 0.5),
+            median_err_sd: bootstrap_sd(&per_image, BOOTSTRAP_DRAWS, seed, |d| {
+                angle_score(d, &kinds, 0.5)
+            }),
+            p90_err_deg: angle_score(&all, &kinds, 0.9),
             ok_fraction: ok as f64 / images.len().max(1) as f64,
             n_items: images.len(),
             on_pareto_front: false,
@@ -401,6 +527,10 @@ pub fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
             Column::new(
                 "median_err_deg".into(),
                 rows.iter().map(|r| r.median_err_deg).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "median_err_sd_deg".into(),
+                rows.iter().map(|r| r.median_err_sd).collect::<Vec<_>>(),
             ),
             Column::new(
                 "p90_err_deg".into(),
@@ -453,6 +583,8 @@ pub fn read_csv(path: &Path) -> Result<Vec<BenchRow>> {
         st("is_default")?,
         st("on_pareto_front")?,
     );
+    // Written since session 11; older files have no sampling noise.
+    let med_sd = f("median_err_sd_deg").unwrap_or_else(|_| vec![0.0; df.height()]);
     let (secs, med, p90, ok, n) = (
         f("seconds_per_item")?,
         f("median_err_deg")?,
@@ -467,6 +599,7 @@ pub fn read_csv(path: &Path) -> Result<Vec<BenchRow>> {
             is_default: default[i] == "true",
             seconds_per_item: secs[i],
             median_err_deg: med[i],
+            median_err_sd: med_sd[i],
             p90_err_deg: p90[i],
             ok_fraction: ok[i],
             n_items: n[i] as usize,
@@ -484,7 +617,12 @@ pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
     for stage in ["extract", "theory", "fit"] {
         let rs: Vec<&BenchRow> = rows
             .iter()
-            .filter(|r| r.stage == stage && r.median_err_deg > 0.0 && r.seconds_per_item > 0.0)
+            .filter(|r| {
+                r.stage == stage
+                    && r.median_err_deg > 0.0
+                    && r.median_err_deg.is_finite()
+                    && r.seconds_per_item > 0.0
+            })
             .collect();
         if rs.is_empty() {
             continue;
@@ -493,12 +631,19 @@ pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
             x: r.seconds_per_item.log10(),
             y: r.median_err_deg.log10(),
             x_err: None,
-            y_err: None,
+            // The median's sampling noise, in log10 (its lower end held at a tenth of it).
+            y_err: (r.median_err_sd > 0.0 && r.median_err_sd.is_finite()).then(|| {
+                let (m, sd) = (r.median_err_deg, r.median_err_sd);
+                (
+                    m.log10() - (m - sd).max(0.1 * m).log10(),
+                    (m + sd).log10() - m.log10(),
+                )
+            }),
         };
-        let unit = if stage == "fit" {
-            "|e - e_true|"
-        } else {
-            "median |error| (deg)"
+        let unit = match stage {
+            "fit" => "|e - e_true|",
+            "extract" => "mean of the angles' median |error| (deg)",
+            _ => "median |error| (deg)",
         };
         let mut panel = Panel::new(
             format!("{stage}: speed against error"),
@@ -531,14 +676,6 @@ pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
             color: RGBColor(200, 40, 40),
             marker: Marker::Square,
         });
-        for r in &rs {
-            panel.notes.push(Note {
-                x: r.seconds_per_item.log10(),
-                y: r.median_err_deg.log10(),
-                text: format!("  {}", r.setting.split(" (").next().unwrap_or(&r.setting)),
-                color: RGBColor(60, 60, 60),
-            });
-        }
         let (xs, ys): (Vec<f64>, Vec<f64>) = rs.iter().map(|r| (pt(r).x, pt(r).y)).unzip();
         let span = |v: &[f64], lo_pad: f64, hi_pad: f64| {
             let (lo, hi) = v
@@ -550,13 +687,59 @@ pub fn pareto_figure(rows: &[BenchRow]) -> crate::report::plot::Figure {
             (lo - lo_pad * w, hi + hi_pad * w)
         };
         // Room on the right for the labels.
-        panel = panel.ranges(span(&xs, 0.1, 0.6), span(&ys, 0.15, 0.15));
+        let (xr, yr) = (span(&xs, 0.1, 0.6), span(&ys, 0.15, 0.15));
+        // Each point carries a number and a key lists the settings in the room on the right:
+        // full names next to the points ran into each other where settings tie (robust_rounds
+        // and the default give the same readings). Points closer than about a character share
+        // one label, "1,11" (about 17 px per line and 8 px per character in a plot area of some
+        // 650 × 420 px). Bars: the median's sampling noise.
+        let line = (yr.1 - yr.0) * 17.0 / 420.0;
+        let char_w = (xr.1 - xr.0) * 8.0 / 650.0;
+        let name = |r: &BenchRow| {
+            r.setting
+                .split(" (")
+                .next()
+                .unwrap_or(&r.setting)
+                .to_string()
+        };
+        let mut groups: Vec<(f64, f64, Vec<usize>)> = Vec::new();
+        for i in 0..rs.len() {
+            match groups
+                .iter_mut()
+                .find(|g| (g.0 - xs[i]).abs() < 4.0 * char_w && (g.1 - ys[i]).abs() < line)
+            {
+                Some(g) => g.2.push(i + 1),
+                None => groups.push((xs[i], ys[i], vec![i + 1])),
+            }
+        }
+        for (x, y, ids) in &groups {
+            let ids: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
+            panel.notes.push(Note {
+                x: *x + 0.5 * char_w,
+                y: *y,
+                text: ids.join(","),
+                color: RGBColor(60, 60, 60),
+            });
+        }
+        let key_x = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 0.12 * (xr.1 - xr.0);
+        let key_top = yr.1 - 0.22 * (yr.1 - yr.0);
+        for (i, r) in rs.iter().enumerate() {
+            panel.notes.push(Note {
+                x: key_x,
+                y: key_top - i as f64 * line,
+                text: format!("{} {}", i + 1, name(r)),
+                color: RGBColor(60, 60, 60),
+            });
+        }
+        panel = panel.ranges(xr, yr);
         panel.legend = LegendAt::UpperRight;
         panels.push(panel);
     }
     Figure::new(
         "pareto",
-        "Speed against error for each stage's cost knobs (default in red, Pareto front in green).",
+        "Speed against error for each stage's cost knobs (default in red, Pareto front in green; \
+         bars: sampling noise of the median; settings that lose half of an angle's readings have \
+         an infinite error and no point).",
         panels,
     )
 }
@@ -594,17 +777,18 @@ pub fn run(args: &BenchArgs) -> CliResult {
         BenchKind::SpeedError(a) => {
             let rows = speed_error(a)?;
             println!(
-                "{:<8} {:<44} {:>3} {:>12} {:>10} {:>10} {:>5} {:>6}",
-                "stage", "setting", "def", "s/item", "median", "p90", "ok", "pareto"
+                "{:<8} {:<44} {:>3} {:>12} {:>10} {:>8} {:>10} {:>5} {:>6}",
+                "stage", "setting", "def", "s/item", "median", "± sd", "p90", "ok", "pareto"
             );
             for r in &rows {
                 println!(
-                    "{:<8} {:<44} {:>3} {:>12.3e} {:>10.4} {:>10.4} {:>5.2} {:>6}",
+                    "{:<8} {:<44} {:>3} {:>12.3e} {:>10.4} {:>8.4} {:>10.4} {:>5.2} {:>6}",
                     r.stage,
                     r.setting,
                     if r.is_default { "*" } else { "" },
                     r.seconds_per_item,
                     r.median_err_deg,
+                    r.median_err_sd,
                     r.p90_err_deg,
                     r.ok_fraction,
                     if r.on_pareto_front { "yes" } else { "no" }
@@ -641,6 +825,7 @@ mod tests {
             is_default: false,
             seconds_per_item: t,
             median_err_deg: e,
+            median_err_sd: 0.0,
             p90_err_deg: e,
             ok_fraction: 1.0,
             n_items: 1,
@@ -665,6 +850,47 @@ mod tests {
         mark_pareto(&mut rows);
         let front: Vec<bool> = rows.iter().map(|r| r.on_pareto_front).collect();
         assert_eq!(front, [true, true, false, false, true, true, true]);
+    }
+
+    #[test]
+    fn sampling_noise_keeps_a_setting_on_the_front() {
+        // 0.10 against 0.11 with sampling noise 0.02 each: no more accurate, so the slower one
+        // stays; with exact medians (theory, noise 0) the same numbers decide.
+        let mut rows = vec![row("a", 1.0, 0.11), row("a", 1.5, 0.10)];
+        rows[0].median_err_sd = 0.02;
+        rows[1].median_err_sd = 0.02;
+        mark_pareto(&mut rows);
+        assert!(rows[0].on_pareto_front && !rows[1].on_pareto_front);
+        let mut exact = vec![row("a", 1.0, 0.11), row("a", 1.02, 0.10)];
+        mark_pareto(&mut exact);
+        assert!(!exact[0].on_pareto_front && exact[1].on_pareto_front);
+    }
+
+    #[test]
+    fn every_angle_weighs_the_same_and_a_lost_one_counts() {
+        // Ten images: psi measured to 0.01 on all, delta1 to 1.0 on six of them, delta2 to 5.0
+        // on two (too few to count).
+        let full = [Some(0.01), Some(1.0), Some(5.0), None, None];
+        let psi_d1 = [Some(0.01), Some(1.0), None, None, None];
+        let psi = [Some(0.01), None, None, None, None];
+        let mut imgs = vec![&full, &full];
+        imgs.extend([&psi_d1; 4]);
+        imgs.extend([&psi; 4]);
+        let kinds = scored_angles(&imgs);
+        assert_eq!(kinds, [0, 1]);
+        let score = angle_score(&imgs, &kinds, 0.5);
+        assert!((score - 0.505).abs() < 1e-12, "{score}");
+        // The same delta1s, three of them lost by a setting: its median is infinite.
+        let lost = [Some(0.01), Some(f64::INFINITY), None, None, None];
+        let mut worse = vec![&full, &full, &psi_d1];
+        worse.extend([&lost; 3]);
+        worse.extend([&psi; 4]);
+        assert!(angle_score(&worse, &kinds, 0.5).is_infinite());
+        assert!((angle_score(&worse, &kinds, 0.0) - 0.505).abs() < 1e-12);
+        // The bootstrap spread of a statistic of identical items is zero.
+        let same = [full; 6];
+        let sd = bootstrap_sd(&same, 50, 1, |d| angle_score(d, &kinds, 0.5));
+        assert!(sd.abs() < 1e-12, "{sd}");
     }
 
     #[test]
