@@ -96,25 +96,29 @@ pub fn quantile(v: &[f64], q: f64) -> f64 {
 
 /// Standard deviation of `stat` when the items are resampled with replacement (`n` bootstrap
 /// draws, seeded): the sampling noise of the statistic itself. Infinite when most draws give an
-/// infinite statistic.
+/// infinite statistic, NaN when most give none (too few readings in a resample).
 pub fn bootstrap_sd<T>(items: &[T], n: usize, seed: u64, stat: impl Fn(&[&T]) -> f64) -> f64 {
     if items.is_empty() {
         return f64::NAN;
     }
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let vals: Vec<f64> = (0..n)
+    let draws: Vec<f64> = (0..n)
         .map(|_| {
             let draw: Vec<&T> = (0..items.len())
                 .map(|_| &items[rng.gen_range(0..items.len())])
                 .collect();
             stat(&draw)
         })
-        .filter(|v| v.is_finite())
         .collect();
+    let vals: Vec<f64> = draws.iter().copied().filter(|v| v.is_finite()).collect();
     if vals.len() < n / 2 {
-        return f64::INFINITY;
+        let infinite = draws.iter().filter(|v| v.is_infinite()).count();
+        return if infinite >= n / 2 {
+            f64::INFINITY
+        } else {
+            f64::NAN
+        };
     }
-    // (NaN draws, a statistic undefined on that resample, were dropped with the infinite ones.)
     let mean = vals.iter().sum::<f64>() / vals.len() as f64;
     (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (vals.len() - 1).max(1) as f64).sqrt()
 }
@@ -125,7 +129,8 @@ type AngleErrors = [Option<f64>; 5];
 
 /// Fewest reference readings of an angle for its quantile to enter [`angle_score`]: the object
 /// ball's `delta2` is measured on two or three photos of a realistic set, too few for a median
-/// that means anything (one lost reading made it infinite, one resampling dropped it).
+/// that means anything (one lost reading made it infinite, one resampling dropped it). A set
+/// with fewer measured photos than this has no extraction score (NaN).
 pub const MIN_ANGLE_READINGS: usize = 5;
 
 /// The angles (indices into [`AngleErrors`]) with at least [`MIN_ANGLE_READINGS`] readings.
@@ -401,9 +406,16 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
     if let Some(d) = settings.iter().find(|s| s.2).cloned() {
         settings.push(d);
     }
-    // Per setting: seconds, ok count and each image's five readings (None: not measured).
-    type Readings = Vec<[Option<f64>; 5]>;
-    let mut runs: Vec<(String, bool, f64, usize, Readings)> = Vec::new();
+    // Per setting: seconds per image, `ok` count and each image's five readings.
+    struct Run {
+        name: String,
+        is_default: bool,
+        secs_per_item: f64,
+        ok: usize,
+        /// `psi, delta1, delta2, theta1, theta2` per image (None: not measured).
+        readings: Vec<[Option<f64>; 5]>,
+    }
+    let mut runs: Vec<Run> = Vec::new();
     for (name, opts, is_default) in settings {
         let (mut ok, mut secs, mut readings) = (0usize, 0.0, Vec::new());
         for (img, plate, texture, scale_r, _) in &images {
@@ -439,11 +451,17 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             });
         }
         let secs_per_item = secs / images.len().max(1) as f64;
-        if let Some(prev) = runs.iter_mut().find(|r| r.0 == name) {
-            prev.2 = prev.2.min(secs_per_item);
+        if let Some(prev) = runs.iter_mut().find(|r| r.name == name) {
+            prev.secs_per_item = prev.secs_per_item.min(secs_per_item);
             continue;
         }
-        runs.push((name, is_default, secs_per_item, ok, readings));
+        runs.push(Run {
+            name,
+            is_default,
+            secs_per_item,
+            ok,
+            readings,
+        });
     }
     // The angles the default measures (and the truth defines) are the reference: a setting is
     // scored on those, and one it does not measure counts as lost (infinite error). Scoring
@@ -453,26 +471,26 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
         |i: usize, k: usize| images[i].4.get(KEYS[k]).and_then(|v| v.parse::<f64>().ok());
     let reference: Vec<Vec<usize>> = runs
         .iter()
-        .find(|r| r.1)
+        .find(|r| r.is_default)
         .map(|d| {
             (0..images.len())
                 .map(|i| {
                     (0..5)
-                        .filter(|&k| d.4[i][k].is_some() && truth_of(i, k).is_some())
+                        .filter(|&k| d.readings[i][k].is_some() && truth_of(i, k).is_some())
                         .collect()
                 })
                 .collect()
         })
         .ok_or_else(|| anyhow!("no default extraction setting"))?;
     let mut rows = Vec::new();
-    for (name, is_default, secs_per_item, ok, readings) in runs {
+    for run in runs {
         let per_image: Vec<AngleErrors> = reference
             .iter()
             .enumerate()
             .map(|(i, ks)| {
                 let mut e = [None; 5];
                 for &k in ks {
-                    e[k] = Some(match (readings[i][k], truth_of(i, k)) {
+                    e[k] = Some(match (run.readings[i][k], truth_of(i, k)) {
                         (Some(m), Some(t)) => angle(m, t),
                         _ => f64::INFINITY,
                     });
@@ -486,15 +504,15 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
         let kinds = scored_angles(&all);
         rows.push(BenchRow {
             stage: "extract".into(),
-            setting: name,
-            is_default,
-            seconds_per_item: secs_per_item,
+            setting: run.name,
+            is_default: run.is_default,
+            seconds_per_item: run.secs_per_item,
             median_err_deg: angle_score(&all, &kinds, 0.5),
             median_err_sd: bootstrap_sd(&per_image, BOOTSTRAP_DRAWS, seed, |d| {
                 angle_score(d, &kinds, 0.5)
             }),
             p90_err_deg: angle_score(&all, &kinds, 0.9),
-            ok_fraction: ok as f64 / images.len().max(1) as f64,
+            ok_fraction: run.ok as f64 / images.len().max(1) as f64,
             n_items: images.len(),
             on_pareto_front: false,
         });
@@ -756,6 +774,15 @@ pub fn speed_error(args: &SpeedErrorArgs) -> Result<Vec<BenchRow>, CliError> {
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    if args.replot {
+        // The measured rows as they are; only the front (its rule may have changed) and the
+        // plot are made again.
+        let mut rows = read_csv(&args.out.join("speed_error.csv"))?;
+        mark_pareto(&mut rows);
+        write_csv(&rows, &args.out.join("speed_error.csv"))?;
+        crate::report::plot::save(&pareto_figure(&rows), &args.out)?;
+        return Ok(rows);
+    }
     let mut rows = Vec::new();
     if stages.contains(&"extract") {
         rows.extend(extract_rows(&args.out, args.shots, args.seed, &args.tier)?);
@@ -887,10 +914,15 @@ mod tests {
         worse.extend([&psi; 4]);
         assert!(angle_score(&worse, &kinds, 0.5).is_infinite());
         assert!((angle_score(&worse, &kinds, 0.0) - 0.505).abs() < 1e-12);
-        // The bootstrap spread of a statistic of identical items is zero.
+        // The bootstrap spread of a statistic of identical items is zero; with too few
+        // readings for any angle there is no score and no spread.
         let same = [full; 6];
         let sd = bootstrap_sd(&same, 50, 1, |d| angle_score(d, &kinds, 0.5));
         assert!(sd.abs() < 1e-12, "{sd}");
+        let few = [full; 3];
+        let refs: Vec<&AngleErrors> = few.iter().collect();
+        assert!(scored_angles(&refs).is_empty());
+        assert!(bootstrap_sd(&few, 50, 1, |d| angle_score(d, &[], 0.5)).is_nan());
     }
 
     #[test]
