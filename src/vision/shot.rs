@@ -700,6 +700,17 @@ pub const SIGMA_SCALE: f64 = 1.35;
 /// See [`calibrated_sd`] (degrees).
 pub const SIGMA_FLOOR_DEG: f64 = 0.032;
 
+/// Shortest clean stretch of the cue ball's rolling line (the span of its centre-line samples
+/// clear of the other streaks, in R) from which `delta1` is read. The line fixes where the
+/// sliding arc ends, and `delta1` follows it closely (0.1° of `theta` moves it by 0.12–0.35°, an
+/// offset of 0.3 px by 0.25–0.76°): where the cue ball's streak runs alongside the object
+/// ball's for most of its length (small psi, a low `theta1`), a line read over a short stretch
+/// let a long, nearly straight arc stand in for a sharp hook hidden under the object ball
+/// (seed 202's clean shot_007: span 1.3 R, `delta1` 53° off at a stated 0.6°; the demo's rubber
+/// shot_027: 2.7 R, 26° off at 0.4°). On twelve synthetic sets (193 `delta1` readings) every
+/// other reading had at least 3.3 R.
+const MIN_ROLLING_SPAN_R: f64 = 3.0;
+
 /// Largest stated 1-sigma of psi (degrees) for which a shot is reported `ok`.
 pub const PSI_RESOLVED_DEG: f64 = 1.5;
 
@@ -1313,6 +1324,7 @@ fn read_from_disc(
     let mut delta1_from_arc = false;
     let mut arc_rival = false;
     let mut arc_rest: Option<f64> = None;
+    let mut short_line: Option<f64> = None;
     let mut angle = |idx: usize, sd: f64, name: &str| -> (Option<f64>, Option<f64>) {
         let sd = calibrated_sd(sd);
         if sd.is_finite() && sd <= unresolved {
@@ -1348,17 +1360,35 @@ fn read_from_disc(
         // small psi a long shallow arc can rival the true short one in the pixels).
         let u_th = (geometry.theta.cos(), geometry.theta.sin());
         let along = |q: (f64, f64)| (q.0 - geometry.p.0) * u_th.0 + (q.1 - geometry.p.1) * u_th.1;
-        let first_sample = pb
-            .out1
-            .as_ref()
-            .and_then(|v| v.iter().map(|q| along((q.x, q.y))).reduce(f64::min));
-        let measured = (opts.arc_pixels && opts.path_models == PathModels::Auto)
-            .then(|| arc::fit(sig, cue_u, &geometry))
-            .flatten()
-            .filter(|a| {
-                let end = along(a.end);
-                first_sample.is_none_or(|f| end <= f + 0.5 * geometry.r)
-            });
+        // The span of the clean centre-line samples along the rolling direction.
+        let samples = pb.out1.as_ref().and_then(|v| {
+            let a = v.iter().map(|q| along((q.x, q.y)));
+            Some((a.clone().reduce(f64::min)?, a.reduce(f64::max)?))
+        });
+        let first_sample = samples.map(|s| s.0);
+        let span = samples.map(|(lo, hi)| (hi - lo) / r);
+        if debug {
+            eprintln!("rolling line: clean span {:.2} R", span.unwrap_or(-1.0));
+        }
+        short_line = span.filter(|s| *s < MIN_ROLLING_SPAN_R);
+        let measured =
+            (opts.arc_pixels && opts.path_models == PathModels::Auto && short_line.is_none())
+                .then(|| arc::fit(sig, cue_u, &geometry))
+                .flatten()
+                .filter(|a| {
+                    let end = along(a.end);
+                    if debug {
+                        eprintln!(
+                            "arc candidate: delta {:.3}° L0 {:.1} L1 {:.1}, end {:.1} px along \
+                         theta, first centre-line sample {first_sample:?}",
+                            deg(m * wrap(a.delta - alpha)),
+                            a.l0,
+                            a.l1,
+                            end
+                        );
+                    }
+                    first_sample.is_none_or(|f| end <= f + 0.5 * geometry.r)
+                });
         if let Some(a) = measured {
             if debug {
                 eprintln!(
@@ -1405,6 +1435,10 @@ fn read_from_disc(
                 delta1_from_arc = true;
             }
         }
+        if short_line.is_some() {
+            out.delta1_deg = None;
+            out.delta1_err_deg = None;
+        }
         // A start tangent more than 90° from the rolling direction is not a sliding arc.
         if let Some(d) = out.delta1_deg
             && wrap((d - deg(m * wrap(fit.params[it]))).to_radians()).abs()
@@ -1429,10 +1463,15 @@ fn read_from_disc(
         out.fit = Some(fit);
         return out;
     }
-    if delta1_from_arc || arc_rival || arc_rest.is_some() {
+    if delta1_from_arc || arc_rival || arc_rest.is_some() || short_line.is_some() {
         notes.retain(|n| !n.starts_with("delta1"));
     }
-    if let Some(d) = arc_rest {
+    if let Some(span) = short_line {
+        notes.push(format!(
+            "delta1 not resolved (the cue ball's rolling line is clear of the other streaks for \
+             only {span:.1} R, too short to fix where its sliding arc ends)"
+        ));
+    } else if let Some(d) = arc_rest {
         notes.push(format!(
             "delta1 not resolved (the cue ball comes to rest {d:.1} R from the impact, next to \
              its sliding arc: its stop is not in the arc's model)"
