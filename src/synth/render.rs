@@ -93,6 +93,25 @@ pub struct Backdrop {
 }
 
 impl Backdrop {
+    /// A dim green table without texture, gradient or vignetting, lit from the upper left, with
+    /// noise variance `noise · x + noise`: the scene of the vision modules' unit tests.
+    #[cfg(test)]
+    pub(crate) fn plain(width: u32, height: u32, noise: f64) -> Backdrop {
+        Backdrop {
+            width,
+            height,
+            cloth_rgb: [0.05, 0.2, 0.08],
+            texture: 0.0,
+            texture_seed: 1,
+            lamp: 300.0,
+            gradient: [0.0, 0.0],
+            vignette: 0.0,
+            light: [-0.3, -0.4, 1.0],
+            noise_a: noise,
+            noise_b: noise,
+        }
+    }
+
     /// Lamp level at pixel `(x, y)`.
     pub fn illumination(&self, x: f64, y: f64) -> f64 {
         let (w, h) = (self.width as f64, self.height as f64);

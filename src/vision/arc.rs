@@ -917,22 +917,6 @@ mod tests {
 
     const R: f64 = 40.0;
 
-    fn backdrop(noise: f64) -> Backdrop {
-        Backdrop {
-            width: 520,
-            height: 420,
-            cloth_rgb: [0.05, 0.2, 0.08],
-            texture: 0.0,
-            texture_seed: 1,
-            lamp: 300.0,
-            gradient: [0.0, 0.0],
-            vignette: 0.0,
-            light: [-0.3, -0.4, 1.0],
-            noise_a: noise,
-            noise_b: noise,
-        }
-    }
-
     /// A rolling-type shot: incoming from the upper left to `P`, an arc starting at `delta`
     /// that ends on the rolling line `theta` (Bézier `L₀, L₁`), drawn as 400 chords of equal
     /// time, then the rolling line at the arc's end speed. Renderer coordinates put pixel
@@ -997,7 +981,7 @@ mod tests {
     /// The arc fit on a rendering with sensor noise `a = b = noise` (seeded), against a
     /// noise-free plate.
     fn measure(frame: &Frame, g: &ArcGeometry, noise: f64, seed: Option<u64>) -> ArcFit {
-        let bd = backdrop(noise);
+        let bd = Backdrop::plain(520, 420, noise);
         let base = bd.base_plate();
         let img = to_float(&render(frame, &bd, &base, seed));
         let plate = to_float(&render(&Frame::default(), &bd, &base, None));

@@ -1557,19 +1557,7 @@ mod tests {
     /// A cue ball rolling from `a` to `b` (and resting there for `rest` of the exposure), and an
     /// object ball that waited half the exposure at `o`, on a noise-free cloth with a plate.
     fn signal(a: (f64, f64), b: (f64, f64), rest: f64, o: (f64, f64), r: f64) -> Signal<'static> {
-        let bd = Backdrop {
-            width: 900,
-            height: 500,
-            cloth_rgb: [0.05, 0.2, 0.08],
-            texture: 0.0,
-            texture_seed: 1,
-            lamp: 300.0,
-            gradient: [0.0, 0.0],
-            vignette: 0.0,
-            light: [-0.3, -0.4, 1.0],
-            noise_a: 0.0,
-            noise_b: 0.0,
-        };
+        let bd = Backdrop::plain(900, 500, 0.0);
         let white = [0.86, 0.85, 0.8];
         let mut discs = vec![Disc {
             c: [o.0, o.1],
