@@ -1104,7 +1104,8 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
                     var.sqrt().to_degrees(),
                 );
             }
-            Some((xf, st.var))
+            // The short-arc rule above holds for the refit too.
+            (legs(&xf).0 >= MIN_ARC_R * g.r).then_some((xf, st.var))
         })
         .flatten();
     let (x, var, systematic) = match filtered {
