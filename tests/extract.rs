@@ -225,8 +225,10 @@ fn folder_texture_without_plate() {
         );
     }
     // Measured 2026-11-24 (texture / surface): psi 0.041° / 0.072°, theta1 0.044° / 0.069°,
-    // theta2 0.032° / 0.091°, delta1 0.47° / 0.37° (10 of 12 each; delta1 comes from pixels near
-    // the impact, where the object ball waits in most shots and the map is blank).
+    // theta2 0.032° / 0.091°, delta1 0.215° / 0.138° (9 of 12 each; session 12's code: 0.456° /
+    // 0.335°). delta1 comes from pixels near the impact, where the object ball waits in
+    // most shots and the map is blank; the arc's high-passed refit (`vision::arc`) takes the
+    // blotches out there, with or without the map. The target is 0.3°.
     for (k, bound) in [("psi", 0.06), ("theta1", 0.06), ("theta2", 0.05)] {
         assert!(m(&tex, k) < bound, "{k} median error {}", m(&tex, k));
         assert!(m(&tex, k) < m(&plain, k), "{k}: the texture must help");
@@ -237,12 +239,12 @@ fn folder_texture_without_plate() {
         tex["delta1"].len()
     );
     assert!(
-        m(&tex, "delta1") < 0.55,
+        m(&tex, "delta1") < 0.3,
         "delta1 median error {}",
         m(&tex, "delta1")
     );
     assert!(
-        m(&plain, "delta1") < 0.55,
+        m(&plain, "delta1") < 0.3,
         "delta1 median error {}",
         m(&plain, "delta1")
     );
