@@ -38,8 +38,8 @@
 //! Levenberg–Marquardt from the best of a few starts on the measured rolling line. `θ` and `P`
 //! come from the centre-line fit (they are far better determined there). Pixels of the object
 //! ball (its waiting disc and its streak) are left out; outliers beyond 4 MAD are dropped once.
-//! Without a plate, where the cloth's blotches dominate the residual, `δ` comes from the same fit
-//! on high-passed data and columns (each cell minus its ±R/4 box mean; see [`HIGHPASS_R`]).
+//! Where the cloth's blotches dominate the residual (photos without a plate), `δ` comes from the
+//! same fit on high-passed data and columns (each cell minus its ±R/4 box mean; [`HIGHPASS_R`]).
 //! Rivals: the start tangent is held 10° either side of the optimum on a short arc (legs 0.4 R)
 //! and the legs refitted; when a rival's cost is within 25 units of the correlation-widened
 //! residual variance, the turn may hide where the streaks overlap and `δ` is not measured.
@@ -327,7 +327,7 @@ struct Pixels {
     /// Cell position on the sampling grid (column, row) and the grid's size.
     cell: Vec<(usize, usize)>,
     grid: (usize, usize),
-    /// Half-width (cells) of the high-pass box, 0 for none (see [`HIGHPASS_R`]).
+    /// Half-width (cells) of the high-pass box (see [`HIGHPASS_R`]).
     highpass: usize,
 }
 
@@ -422,11 +422,7 @@ impl Pixels {
             }
             Some(acc / (stride * stride) as f64)
         };
-        let highpass = if sig.plate {
-            0
-        } else {
-            ((HIGHPASS_R * r / stride as f64).round() as usize).max(1)
-        };
+        let highpass = ((HIGHPASS_R * r / stride as f64).round() as usize).max(1);
         let mut px = Pixels {
             kernel,
             q: Vec::new(),
@@ -571,10 +567,9 @@ struct Mask {
 }
 
 impl Mask {
-    /// The mask `keep`, with the data and columns high-passed when asked (and the pixels have
-    /// a filter, i.e. there is no plate).
+    /// The mask `keep`, with the data and columns high-passed when asked.
     fn new(px: &Pixels, keep: Vec<bool>, highpass: bool) -> Mask {
-        let highpass = (highpass && px.highpass > 0).then(|| HighPass::new(px, &keep));
+        let highpass = highpass.then(|| HighPass::new(px, &keep));
         let (v, fixed) = match &highpass {
             Some(hp) => {
                 let both = hp.apply(|i| {
@@ -623,7 +618,7 @@ impl Mask {
     }
 }
 
-/// Half-width of the high-pass box (in R) for photos without a plate: the data and every column
+/// Half-width of the high-pass box (in R), for photos without a plate: the data and every column
 /// minus their mean over the kept cells within `±HIGHPASS_R R` (summed-area tables). Around the
 /// impacts the folder's texture map is blank (a ball covers that cloth in most shots), and the
 /// blotches left after the colour projection, 70–90 px across, were most of `delta1`'s error
@@ -1018,6 +1013,11 @@ fn statistics(px: &Pixels, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option
 /// chosen arc only, on a grid of one pixel per `R/25` (some 10 000 pixels whatever the scale),
 /// with one round of outlier rejection.
 pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
+    fit_with(sig, u, g, true)
+}
+
+/// [`fit`], with the high-passed refit allowed or not (the unit tests compare the two).
+fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) -> Option<ArcFit> {
     let cands = starts(g);
     let coarse = Pixels::gather(sig, u, g, &cands, ((g.r / 20.0).round() as usize).max(2));
     if coarse.q.len() < 100 {
@@ -1084,13 +1084,13 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
     if let Some(path) = std::env::var_os("STREAKFIT_ARC_DUMP") {
         dump(&px, &res, keep, std::path::Path::new(&path));
     }
-    // Without a plate, where the cloth's blotches dominate the residual (its correlation factor
-    // at least [`HIGHPASS_MIN_F`]), the start tangent and its statistical error come from the
+    // Where the cloth's blotches dominate the residual (its correlation factor at least
+    // [`HIGHPASS_MIN_F`]; no reading with a plate came near it), the start tangent and its statistical error come from the
     // same fit with the blotches filtered out ([`HIGHPASS_R`]). Whether it is resolved at all
     // (the rivals above) is decided on the unfiltered light, whose correlation factor sees the
     // blotches: on the filtered residuals it is near 1, and rivals were passed that fit nearly
     // as well (a rubber shot 8° off at a stated 1.2°).
-    let filtered = (px.highpass > 0 && f >= HIGHPASS_MIN_F)
+    let filtered = (allow_highpass && f >= HIGHPASS_MIN_F)
         .then(|| {
             let fmask = Mask::new(&px, mask.keep.clone(), true);
             let (xf, _) = levenberg_marquardt(&px, g, x, &fmask, 15)?;
@@ -1324,13 +1324,12 @@ mod tests {
             bd.texture_seed = seed;
             let base = bd.base_plate();
             let img = to_float(&render(&frame, &bd, &base, Some(seed)));
-            let mut sig = background::build(&img, background::Cloth::Surface, 600).expect("signal");
+            let sig = background::build(&img, background::Cloth::Surface, 600).expect("signal");
             let a = fit(&sig, sig.u, &g).expect("arc fit");
             used += usize::from(a.highpass);
             filtered.push((a.delta - delta).to_degrees().abs());
-            // The same light as if a plate had been subtracted: never filtered.
-            sig.plate = true;
-            let b = fit(&sig, sig.u, &g).expect("arc fit");
+            // The same light, unfiltered.
+            let b = fit_with(&sig, sig.u, &g, false).expect("arc fit");
             assert!(!b.highpass);
             plain.push((b.delta - delta).to_degrees().abs());
         }
