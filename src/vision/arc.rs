@@ -192,6 +192,14 @@ struct Prepared {
 }
 
 impl Prepared {
+    /// The piece's end point.
+    fn end(&self) -> (f64, f64) {
+        (
+            self.a.0 + self.len * self.d.0,
+            self.a.1 + self.len * self.d.1,
+        )
+    }
+
     fn new(a: (f64, f64), b: (f64, f64), dens: f64) -> Prepared {
         let (dx, dy) = (b.0 - a.0, b.1 - a.1);
         let len = dx.hypot(dy);
@@ -324,9 +332,13 @@ struct Pixels {
     v: Vec<f64>,
     /// Incoming (3) and baseline (6) columns, row-major per pixel.
     fixed: Vec<[f64; NFIX]>,
-    /// Cell position on the sampling grid (column, row) and the grid's size.
+    /// Cell position on the sampling grid (column, row), the grid's size, its first cell (px)
+    /// and spacing, and each grid position's cell (`u32::MAX` where none).
     cell: Vec<(usize, usize)>,
     grid: (usize, usize),
+    origin: (usize, usize),
+    stride: usize,
+    index: Vec<u32>,
     /// Half-width (cells) of the high-pass box (see [`HIGHPASS_R`]).
     highpass: usize,
 }
@@ -430,6 +442,9 @@ impl Pixels {
             fixed: Vec::new(),
             cell: Vec::new(),
             grid: ((xb - xa) / stride + 1, (yb - ya) / stride + 1),
+            origin: (xa, ya),
+            stride,
+            index: Vec::new(),
             highpass,
         };
         for yy in (ya..=yb).step_by(stride) {
@@ -458,7 +473,33 @@ impl Pixels {
                     .push([e.d0, e.d2, e.ramp, 1.0, sx, sy, sx * sx, sx * sy, sy * sy]);
             }
         }
+        px.index = vec![u32::MAX; px.grid.0 * px.grid.1];
+        for (i, &(cx, cy)) in px.cell.iter().enumerate() {
+            px.index[cy * px.grid.0 + cx] = i as u32;
+        }
         px
+    }
+
+    /// The cells whose centres lie in the box `[x0, x1] × [y0, y1]` (px).
+    fn cells_in(&self, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> impl Iterator<Item = usize> {
+        let (gw, gh) = self.grid;
+        let (ox, oy, st) = (
+            self.origin.0 as f64,
+            self.origin.1 as f64,
+            self.stride as f64,
+        );
+        let lo = |v: f64, o: f64| ((v - o) / st).ceil().max(0.0) as usize;
+        let hi = |v: f64, o: f64, n: usize| {
+            (((v - o) / st).floor().max(-1.0) + 1.0).min(n as f64) as usize
+        };
+        let (cx0, cx1) = (lo(x0, ox), hi(x1, ox, gw));
+        let (cy0, cy1) = (lo(y0, oy), hi(y1, oy, gh));
+        (cy0..cy1.max(cy0)).flat_map(move |cy| {
+            (cx0..cx1.max(cx0))
+                .map(move |cx| self.index[cy * gw + cx])
+                .filter(|&i| i != u32::MAX)
+                .map(|i| i as usize)
+        })
     }
 
     /// Outgoing columns for the nonlinear parameters `x`.
@@ -468,38 +509,32 @@ impl Pixels {
             .iter()
             .map(|&(a, b, d)| Prepared::new(a, b, d))
             .collect();
-        // Pixels away from the arc only see the rolling line (the last piece).
-        let arc = &pieces[..pieces.len() - 1];
+        // Each piece of the arc is visited only by the cells within reach of it (its box): a
+        // piece of a few px covers a fifth of the window. A cell beyond a piece's reach gets
+        // exactly 0 from it, and the sums run over the pieces in the same order, so this is the
+        // same to the last bit as visiting every piece from every cell.
+        let (arc, line) = prepared.split_at(prepared.len() - 1);
         let reach = self.kernel.rmax + 1.0;
-        let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-        for (a, b, _) in arc {
-            x0 = x0.min(a.0.min(b.0) - reach);
-            y0 = y0.min(a.1.min(b.1) - reach);
-            x1 = x1.max(a.0.max(b.0) + reach);
-            y1 = y1.max(a.1.max(b.1) + reach);
+        let mut out = vec![Dwell::default(); self.q.len()];
+        for piece in arc {
+            let (a, b) = (piece.a, piece.end());
+            let lo = (a.0.min(b.0) - reach, a.1.min(b.1) - reach);
+            let hi = (a.0.max(b.0) + reach, a.1.max(b.1) + reach);
+            for i in self.cells_in(lo, hi) {
+                let f = piece.dwell(self.q[i], &self.kernel);
+                out[i].d0 += f.d0;
+                out[i].d2 += f.d2;
+            }
         }
-        self.q
-            .iter()
-            .map(|&q| {
-                let near_arc = q.0 >= x0 && q.0 <= x1 && q.1 >= y0 && q.1 <= y1;
-                let used = if near_arc {
-                    &prepared[..]
-                } else {
-                    &prepared[arc.len()..]
-                };
-                let mut sum = Dwell::default();
-                for piece in used {
-                    let f = piece.dwell(q, &self.kernel);
-                    sum.d0 += f.d0;
-                    sum.d2 += f.d2;
-                    // Only the rolling line (the last piece) decelerates at a constant rate;
-                    // the arc's own speed change is in its shape, so its pieces' ramps are
-                    // overwritten.
-                    sum.ramp = f.ramp;
-                }
-                sum
-            })
-            .collect()
+        // Only the rolling line decelerates at a constant rate (the arc's own speed change is in
+        // its shape): its ramp is the only one.
+        for (o, &q) in out.iter_mut().zip(&self.q) {
+            let f = line[0].dwell(q, &self.kernel);
+            o.d0 += f.d0;
+            o.d2 += f.d2;
+            o.ramp = f.ramp;
+        }
+        out
     }
 
     /// Projected cost and residuals at the nonlinear parameters `x` (amplitudes eliminated).
@@ -1280,6 +1315,9 @@ mod tests {
             fixed: Vec::new(),
             cell: Vec::new(),
             grid: (gw, gh),
+            origin: (0, 0),
+            stride: 2,
+            index: Vec::new(),
             highpass: 1,
         };
         for cy in 0..gh {
