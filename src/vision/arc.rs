@@ -555,7 +555,9 @@ impl Pixels {
         let mut atb = mask.atb;
         let var = mask.var_columns(self, out);
         for (((vc, fixed), &v), &k) in var.iter().zip(&mask.fixed).zip(&mask.v).zip(&mask.keep) {
-            if !k {
+            // A cell out of the outgoing ball's reach adds exactly nothing to these rows (its
+            // fixed block is already in the mask's sums).
+            if !k || vc.iter().all(|c| *c == 0.0) {
                 continue;
             }
             let row = row_of(vc, fixed);
