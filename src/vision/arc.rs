@@ -907,8 +907,8 @@ const SYSTEMATIC_DELTA_NO_PLATE_DEG: f64 = 0.6;
 const SYSTEMATIC_DELTA_HIGHPASS_DEG: f64 = 0.25;
 
 /// Variance inflation for spatially correlated residuals (cloth texture, shared noise): the mean
-/// of `n_b m_b² / s²` over blocks of about `R/2` px, `m_b` a block's mean residual, `n_b` its
-/// pixel count, `s²` the residual variance (1 for independent pixels).
+/// of `n_b m_b² / s²` over blocks of `side` px (at least 4), `m_b` a block's mean residual, `n_b`
+/// its pixel count, `s²` the residual variance (1 for independent pixels).
 fn correlation_factor(px: &Pixels, res: &[f64], keep: &[bool], side: f64) -> f64 {
     let side = side.max(4.0);
     // Ordered, so that the sum below is the same to the last bit on every run (a hash map's
