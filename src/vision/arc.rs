@@ -192,14 +192,6 @@ struct Prepared {
 }
 
 impl Prepared {
-    /// The piece's end point.
-    fn end(&self) -> (f64, f64) {
-        (
-            self.a.0 + self.len * self.d.0,
-            self.a.1 + self.len * self.d.1,
-        )
-    }
-
     fn new(a: (f64, f64), b: (f64, f64), dens: f64) -> Prepared {
         let (dx, dy) = (b.0 - a.0, b.1 - a.1);
         let len = dx.hypot(dy);
@@ -488,14 +480,14 @@ impl Pixels {
             self.origin.1 as f64,
             self.stride as f64,
         );
-        let lo = |v: f64, o: f64| ((v - o) / st).ceil().max(0.0) as usize;
-        let hi = |v: f64, o: f64, n: usize| {
-            (((v - o) / st).floor().max(-1.0) + 1.0).min(n as f64) as usize
+        // Grid columns (rows) `ceil((v0 - o)/st) ..= floor((v1 - o)/st)`, clamped to the grid;
+        // the float-to-usize casts saturate negative values at 0.
+        let range = |v0: f64, v1: f64, o: f64, n: usize| {
+            ((v0 - o) / st).ceil() as usize..((((v1 - o) / st).floor() + 1.0) as usize).min(n)
         };
-        let (cx0, cx1) = (lo(x0, ox), hi(x1, ox, gw));
-        let (cy0, cy1) = (lo(y0, oy), hi(y1, oy, gh));
-        (cy0..cy1.max(cy0)).flat_map(move |cy| {
-            (cx0..cx1.max(cx0))
+        let (xs, ys) = (range(x0, x1, ox, gw), range(y0, y1, oy, gh));
+        ys.flat_map(move |cy| {
+            xs.clone()
                 .map(move |cx| self.index[cy * gw + cx])
                 .filter(|&i| i != u32::MAX)
                 .map(|i| i as usize)
@@ -516,8 +508,7 @@ impl Pixels {
         let (arc, line) = prepared.split_at(prepared.len() - 1);
         let reach = self.kernel.rmax + 1.0;
         let mut out = vec![Dwell::default(); self.q.len()];
-        for piece in arc {
-            let (a, b) = (piece.a, piece.end());
+        for (piece, &(a, b, _)) in arc.iter().zip(&pieces) {
             let lo = (a.0.min(b.0) - reach, a.1.min(b.1) - reach);
             let hi = (a.0.max(b.0) + reach, a.1.max(b.1) + reach);
             for i in self.cells_in(lo, hi) {
@@ -609,7 +600,7 @@ impl Mask {
         let highpass = highpass.then(|| HighPass::new(px, &keep));
         let (v, fixed) = match &highpass {
             Some(hp) => {
-                let both = hp.apply(|i| {
+                let both = hp.apply(&px.cell, &keep, |i| {
                     let mut a = [0.0; NFIX + 1];
                     a[..NFIX].copy_from_slice(&px.fixed[i]);
                     a[NFIX] = px.v[i];
@@ -649,7 +640,7 @@ impl Mask {
     fn var_columns(&self, px: &Pixels, out: &[Dwell]) -> Vec<[f64; NVAR]> {
         let raw = |i: usize| var_columns(out[i], &px.fixed[i]);
         match &self.highpass {
-            Some(hp) => hp.apply(raw),
+            Some(hp) => hp.apply(&px.cell, &self.keep, raw),
             None => (0..out.len()).map(raw).collect(),
         }
     }
@@ -674,14 +665,13 @@ const HIGHPASS_R: f64 = 0.25;
 /// |error| of the 14 changed readings 5.4° against 3.9°).
 const HIGHPASS_MIN_F: f64 = 6.0;
 
-/// Box means over the kept cells of a [`Pixels`] grid, by summed-area tables.
+/// Box means over the kept cells of a [`Pixels`] grid (the cells and mask are the caller's), by
+/// summed-area tables.
 struct HighPass {
     /// Table size: the grid plus a border row and column of zeros.
     gw: usize,
     gh: usize,
     k: usize,
-    cell: Vec<(usize, usize)>,
-    keep: Vec<bool>,
     /// Summed-area table of the kept indicator.
     count: Vec<f64>,
 }
@@ -713,8 +703,6 @@ impl HighPass {
             gw,
             gh,
             k: px.highpass,
-            cell: px.cell.clone(),
-            keep: keep.to_vec(),
             count,
         }
     }
@@ -735,19 +723,24 @@ impl HighPass {
         ]
     }
 
-    /// `f(i)` minus the mean of `f` over the kept cells in `i`'s box, for every cell `i`.
-    fn apply<const M: usize>(&self, f: impl Fn(usize) -> [f64; M]) -> Vec<[f64; M]> {
-        let vals: Vec<[f64; M]> = (0..self.cell.len()).map(f).collect();
+    /// `f(i)` minus the mean of `f` over the kept cells in `i`'s box, for every cell `i` of
+    /// `cell` (grid positions; `keep` the mask the table was made with).
+    fn apply<const M: usize>(
+        &self,
+        cell: &[(usize, usize)],
+        keep: &[bool],
+        f: impl Fn(usize) -> [f64; M],
+    ) -> Vec<[f64; M]> {
+        let vals: Vec<[f64; M]> = (0..cell.len()).map(f).collect();
         let mut t = vec![0.0; self.gw * self.gh * M];
-        for ((&(cx, cy), v), &k) in self.cell.iter().zip(&vals).zip(&self.keep) {
+        for ((&(cx, cy), v), &k) in cell.iter().zip(&vals).zip(keep) {
             if k {
                 let i = ((cy + 1) * self.gw + cx + 1) * M;
                 t[i..i + M].copy_from_slice(v);
             }
         }
         integrate(&mut t, self.gw, self.gh, M);
-        self.cell
-            .iter()
+        cell.iter()
             .zip(vals)
             .map(|(&c, v)| {
                 let [a, b, cc, d] = self.corners(c);
