@@ -821,6 +821,55 @@ fn within_scale(mut a: Analysis, scene_radius_px: Option<f64>) -> Analysis {
         fit.r(),
         a.disc.as_ref().map_or(f64::NAN, |d| d.r)
     );
+    clear_angles(&mut a);
+    a
+}
+
+/// Smallest impact angle (degrees) at which [`deflected`] checks the cue ball's turn.
+const DEFLECTION_PSI_MIN_DEG: f64 = 20.0;
+
+/// Least `tan theta1 / tan psi` of a cue ball after any impact with restitution `e ≥ 0.5` and
+/// follow up to twice natural roll (`r ≤ 2`): without ball–ball friction the cue ball keeps
+/// `v sin psi` across the line of centres and `(1 - e)/2 · v cos psi` along it, and rolls off at
+/// `(5 v_post + 2 r v u)/7`, so `tan theta1 = (5 + 2r)/(5c + 2r) tan psi`, `c = (1 - e)/2`:
+/// at least `9 / 5.25 = 12/7`.
+const DEFLECTION_TAN_RATIO: f64 = 12.0 / 7.0;
+
+/// An `ok` reading refused when the cue ball's rolling line leaves at nearly its incoming
+/// direction (`theta1 - psi` below half the least turn physics allows, by 3 sigma): a straight
+/// streak passing the object ball (a stray ball) read as the cue ball arriving and leaving.
+/// `closed::predict_auto` over `e` 0.5–1, `mu` 0–0.8, `r` −1.5–2 and English ±1 turns the cue
+/// ball by at least the frictionless bound `atan(12/7 tan psi) - psi` for psi ≥ 30° (11.7° at
+/// 59°) and by 10.6° against 12.0° at 20°; half of it leaves that margin. On 17 synthetic sets
+/// (226 `ok` rows with psi ≥ 20°) it refuses one row, seed 404 hard shot_001:
+/// psi 58° off, the cue ball "turned" by −0.3°; the closest right reading keeps 2.2 sigma.
+fn deflected(mut a: Analysis) -> Analysis {
+    let (Some(psi), Some(t1), Some(sp), Some(st)) =
+        (a.psi_deg, a.theta1_deg, a.psi_err_deg, a.theta1_err_deg)
+    else {
+        return a;
+    };
+    if a.status != Status::Ok || psi < DEFLECTION_PSI_MIN_DEG {
+        return a;
+    }
+    let least =
+        ((DEFLECTION_TAN_RATIO * psi.to_radians().tan()).atan() - psi.to_radians()).to_degrees();
+    let turn = t1 - psi;
+    if turn >= 0.5 * least - 3.0 * sp.hypot(st) {
+        return a;
+    }
+    a.status = Status::Declined;
+    a.reason = format!(
+        "the cue ball leaves turned by {turn:.1}° at psi = {psi:.1}°, where any impact turns it \
+         by at least {least:.1}°: a straight streak passing the object ball (a stray ball?) was \
+         read as the cue ball's"
+    );
+    clear_angles(&mut a);
+    a
+}
+
+/// Drops the angles of a refused reading (its geometry stays for the overlay).
+fn clear_angles(a: &mut Analysis) {
     for v in [
         &mut a.psi_deg,
         &mut a.delta1_deg,
@@ -835,7 +884,6 @@ fn within_scale(mut a: Analysis, scene_radius_px: Option<f64>) -> Analysis {
     ] {
         *v = None;
     }
-    a
 }
 
 /// Reads the scene from the candidate discs in turn (see [`analyse`]). Reported, when none
@@ -879,7 +927,10 @@ fn read_candidates(
             ));
             continue;
         }
-        let a = within_scale(read_from_disc(sig, dsc, opts, false), scene_radius_px);
+        let a = within_scale(
+            deflected(read_from_disc(sig, dsc, opts, false)),
+            scene_radius_px,
+        );
         if debug {
             eprintln!("disc reading: {:?} {}", a.status, a.reason);
         }
@@ -1614,6 +1665,75 @@ mod tests {
             delta_lin: [None; 2],
         });
         a
+    }
+
+    /// The least turn `deflected` assumes holds for the impact model itself: over restitution
+    /// 0.5–1, ball–ball friction 0–0.8, spin −1.5–2 and English ±1 the closed forms turn the
+    /// cue ball by at least the frictionless bound for psi ≥ 30° and by more than half of it
+    /// from 20°.
+    #[test]
+    fn every_impact_turns_the_cue_ball_by_the_least_turn() {
+        use crate::physics::{Coefficients, Shot, closed};
+        for psi_deg in [20.0f64, 25.0, 30.0, 45.0, 60.0, 75.0, 85.0] {
+            let psi = psi_deg.to_radians();
+            let least = (DEFLECTION_TAN_RATIO * psi.tan()).atan() - psi;
+            let mut min_turn = f64::INFINITY;
+            for ie in 0..=5 {
+                for im in 0..=8 {
+                    for ir in 0..=14 {
+                        for ien in 0..=4 {
+                            let shot = Shot {
+                                psi,
+                                mass_ratio: 1.0,
+                                spin: -1.5 + 0.25 * ir as f64,
+                                english: -1.0 + 0.5 * ien as f64,
+                            };
+                            let c = Coefficients::new(0.5 + 0.1 * ie as f64, 0.1 * im as f64, 0.2);
+                            let t1 = closed::predict_auto(&shot, &c).1.theta1.expect("moves");
+                            min_turn = min_turn.min((t1 - psi).abs());
+                        }
+                    }
+                }
+            }
+            if psi_deg >= 30.0 {
+                assert!(
+                    min_turn >= least - 1e-9,
+                    "psi {psi_deg}: {min_turn} < {least}"
+                );
+            }
+            assert!(
+                min_turn > 0.5 * least,
+                "psi {psi_deg}: {min_turn} vs {least}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_cue_ball_that_does_not_turn_is_a_misreading() {
+        let with = |psi: f64, theta1: f64| {
+            let mut a = fitted(100.0);
+            a.psi_deg = Some(psi);
+            a.theta1_deg = Some(theta1);
+            a.theta1_err_deg = Some(1.1);
+            a.psi_err_deg = Some(1.2);
+            deflected(a)
+        };
+        // Seed 404 hard shot_001: a stray ball's straight streak read as arriving and leaving.
+        let refused = with(59.28, 58.95);
+        assert_eq!(refused.status, Status::Declined);
+        assert!(
+            refused.reason.contains("at least 11.6°"),
+            "{}",
+            refused.reason
+        );
+        assert!(refused.psi_deg.is_none() && refused.theta1_deg.is_none());
+        // A rolling billiard cue ball at psi 59° turns to about 80°: kept, as is a turn of half
+        // the least one within 3 sigma (5.8° - 3 × 1.63°).
+        assert_eq!(with(59.28, 80.0).status, Status::Ok);
+        assert_eq!(with(59.28, 60.5).status, Status::Ok);
+        assert_eq!(with(59.28, 59.9).status, Status::Declined);
+        // Below 20° throw and English can cancel the turn: not checked.
+        assert_eq!(with(10.0, 10.0).status, Status::Ok);
     }
 
     #[test]
