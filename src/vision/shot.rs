@@ -801,7 +801,7 @@ fn refine_to_scale(
 /// An `ok` reading refused when the ball radius its joint fit settled on (half the centres'
 /// distance at impact, which the incoming line, the object ball's path and the disc fix together)
 /// leaves the scale's window [`DISC_SCALE_RATIO`]: the fit has pulled the disc to meet a misread
-/// streak. Measured on 15 synthetic sets of seeds 101–505 and two lossless hard sets (276 `ok`
+/// streak. Measured on 15 synthetic sets (seeds 8 and 101–505) and two lossless hard sets (276 `ok`
 /// rows): the right readings lie at 0.95–1.07 of the scale's radius; outside the window lay only
 /// misreadings, 7–18° off at stated errors below 0.8° (stray-ball shots: a streak misread, a
 /// dark object ball's disc fitted off its edge). Checked on seed 606 (four tiers, 65 `ok` rows):
