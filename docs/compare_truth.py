@@ -4,8 +4,9 @@
 Usage: compare_truth.py DIR TABLE.csv [DIR TABLE.csv ...]
 DIR holds a synthetic set (`streakfit synth`, with truth.csv); TABLE.csv is `streakfit extract
 DIR --out TABLE.csv`. Prints, per angle, the median and 90th percentile of |measured - true| over
-the `ok` rows where both are defined, how many rows were `ok`, and the sigma ratio
-median(|error| / stated sigma) / 0.6745 (1 for honest Gaussian 1-sigma errors).
+the `ok` rows where both are defined, how many rows were `ok`, the sigma ratio
+median(|error| / stated sigma) / 0.6745 (1 for honest Gaussian 1-sigma errors), and the `ok`
+rows misread: an angle more than 5 stated sigma and more than 1 degree off.
 """
 import csv
 import statistics
@@ -38,6 +39,19 @@ def report(folder, table):
         p90 = errs[int(round(0.9 * (len(errs) - 1)))]
         ratio = statistics.median(pulls) / 0.6745 if pulls else float("nan")
         print(f"  {k:7s} n {len(errs):3d}  median {statistics.median(errs):.3f}  p90 {p90:.3f}  sigma ratio {ratio:.2f}")
+    misread = []
+    for r in ok:
+        worst = None
+        for k in ["psi", "delta1", "delta2", "theta1", "theta2"]:
+            tv, mv, sd = truth[r["file"]][f"{k}_deg"], r[f"{k}_deg"], r[f"{k}_err_deg"]
+            if tv == "" or mv == "" or sd == "":
+                continue
+            e = angle_error(float(mv), float(tv))
+            if e > 1.0 and e > 5.0 * float(sd) and (worst is None or e > worst[1]):
+                worst = (k, e, e / float(sd))
+        if worst:
+            misread.append(f"{r['file']} ({worst[0]} {worst[1]:.1f} deg, {worst[2]:.0f} sigma)")
+    print(f"  misread {len(misread)}" + (": " + ", ".join(misread) if misread else ""))
 
 
 args = sys.argv[1:]
