@@ -47,6 +47,7 @@
 use super::background::{Signal, mad_sigma};
 use super::streak::seg_dist2;
 use nalgebra::{DMatrix, DVector};
+use std::borrow::Cow;
 
 /// Result of the pixel fit of the sliding arc (image angles, radians).
 #[derive(Debug, Clone, Copy)]
@@ -545,7 +546,8 @@ impl Pixels {
         let mut acc = mask.ata;
         let mut atb = mask.atb;
         let var = mask.var_columns(self, out);
-        for (((vc, fixed), &v), &k) in var.iter().zip(&mask.fixed).zip(&mask.v).zip(&mask.keep) {
+        let (fixed, v) = (&mask.fixed[..], &mask.v[..]);
+        for (((vc, fixed), &v), &k) in var.iter().zip(fixed).zip(v).zip(&mask.keep) {
             // A cell out of the outgoing ball's reach adds exactly nothing to these rows (its
             // fixed block is already in the mask's sums).
             if !k || vc.iter().all(|c| *c == 0.0) {
@@ -584,19 +586,20 @@ impl Pixels {
 /// The pixels a fit uses, with the parts of the normal equations that do not depend on the
 /// nonlinear parameters (the fixed columns' block), accumulated once per mask instead of once
 /// per evaluation (they were 40 % of the accumulation).
-struct Mask {
+struct Mask<'a> {
     keep: Vec<bool>,
     ata: [[f64; NLIN]; NLIN],
     atb: [f64; NLIN],
-    /// The data and the fixed columns as fitted (high-passed when [`Pixels::highpass`] is set).
-    v: Vec<f64>,
-    fixed: Vec<[f64; NFIX]>,
+    /// The data and the fixed columns as fitted: high-passed when [`Pixels::highpass`] is set,
+    /// else the grid's own.
+    v: Cow<'a, [f64]>,
+    fixed: Cow<'a, [[f64; NFIX]]>,
     highpass: Option<HighPass>,
 }
 
-impl Mask {
+impl<'a> Mask<'a> {
     /// The mask `keep`, with the data and columns high-passed when asked.
-    fn new(px: &Pixels, keep: Vec<bool>, highpass: bool) -> Mask {
+    fn new(px: &'a Pixels, keep: Vec<bool>, highpass: bool) -> Mask<'a> {
         let highpass = highpass.then(|| HighPass::new(px, &keep));
         let (v, fixed) = match &highpass {
             Some(hp) => {
@@ -606,15 +609,16 @@ impl Mask {
                     a[NFIX] = px.v[i];
                     a
                 });
-                let v = both.iter().map(|a| a[NFIX]).collect();
-                let fixed = both.iter().map(|a| std::array::from_fn(|j| a[j])).collect();
-                (v, fixed)
+                let v: Vec<f64> = both.iter().map(|a| a[NFIX]).collect();
+                let fixed: Vec<[f64; NFIX]> =
+                    both.iter().map(|a| std::array::from_fn(|j| a[j])).collect();
+                (Cow::Owned(v), Cow::Owned(fixed))
             }
-            None => (px.v.clone(), px.fixed.clone()),
+            None => (Cow::Borrowed(&px.v[..]), Cow::Borrowed(&px.fixed[..])),
         };
         let mut ata = [[0.0f64; NLIN]; NLIN];
         let mut atb = [0.0f64; NLIN];
-        for ((fixed, &v), &k) in fixed.iter().zip(&v).zip(&keep) {
+        for ((fixed, &v), &k) in fixed.iter().zip(v.iter()).zip(&keep) {
             if !k {
                 continue;
             }
@@ -967,13 +971,14 @@ const CONVERGED_LEG: f64 = 0.02;
 
 /// The fit's statistics at an optimum `x`: the variance of `δ` (from the full problem's
 /// covariance, 3 nonlinear + linear amplitudes, widened by the residuals' correlation), the
-/// cost, the residual variance, the correlation factor and the residuals.
+/// cost, the residual variance, the correlation factor, the residuals and the pixels kept.
 struct Stat {
     var: f64,
     c0: f64,
     s2: f64,
     f: f64,
     res: Vec<f64>,
+    n: usize,
 }
 
 fn statistics(px: &Pixels, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option<Stat> {
@@ -1032,6 +1037,7 @@ fn statistics(px: &Pixels, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option
         s2,
         f,
         res,
+        n,
     })
 }
 
@@ -1093,6 +1099,7 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
         s2,
         f,
         res,
+        n,
     } = statistics(&px, g, &x, &mask)?;
     // The cost near the optimum is not the whole story: a short arc turning ±10° more, refitted
     // with its start tangent held, may fit nearly as well when the turn hides where the streaks
@@ -1154,7 +1161,7 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
             g.p.0 + l0 * x[0].cos() + l1 * g.theta.cos(),
             g.p.1 + l0 * x[0].sin() + l1 * g.theta.sin(),
         ),
-        n_px: keep.iter().filter(|k| **k).count(),
+        n_px: n,
         highpass: filtered.is_some(),
         rms: s2.sqrt(),
     })

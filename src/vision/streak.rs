@@ -268,7 +268,7 @@ impl CoarseMap {
         let f = sig.f as f64;
         let rc = r / f;
         let (s, chans) = norm_map(sig, rc);
-        let level = super::background::median(&mut s.clone());
+        let level = super::background::median_of(&s);
         let noise = mad_sigma_about(&s, level);
         CoarseMap {
             w: sig.cw,

@@ -16,7 +16,9 @@
 //! ([`super::background::build`]), so a camera that moved, or another table, gets the plain
 //! surface.
 
-use super::background::{block_mean, box_blur, eval_surface, fit_cloth_poly, mad_sigma, median};
+use super::background::{
+    block_mean, box_blur, eval_surface, fit_cloth_poly, mad_sigma, median, median_of,
+};
 use super::image_io::RgbImage;
 use rayon::prelude::*;
 
@@ -112,7 +114,7 @@ pub fn residual(img: &RgbImage, coarse_side: usize) -> Residual {
         .collect();
     let side = tw.max(th);
     let sm = box_blur(&a, tw, th, (side / 150).max(1));
-    let level = median(&mut sm.clone());
+    let level = median_of(&sm);
     let thr = level + 5.0 * mad_sigma(&sm).max(1e-6);
     let hot: Vec<f32> = sm.iter().map(|&v| f32::from(v > thr)).collect();
     let rd = (side / 60).max(1);
@@ -289,7 +291,7 @@ mod tests {
         // Ten cloth values around 0 (noise 1) and five with a streak's light (+8).
         let mut v: Vec<f32> = vec![-1.2, -0.8, -0.5, -0.2, 0.0, 0.1, 0.3, 0.6, 0.9, 1.1];
         v.extend([8.0, 8.3, 7.6, 8.1, 7.9]);
-        let plain = median(&mut v.clone());
+        let plain = median_of(&v);
         assert!(plain > 0.5, "plain median {plain}");
         let c = clipped_median(&mut v, 1.0, 4);
         // The ten cloth values are left; `median` takes the upper of the middle two.
