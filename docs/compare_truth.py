@@ -6,7 +6,10 @@ DIR holds a synthetic set (`streakfit synth`, with truth.csv); TABLE.csv is `str
 DIR --out TABLE.csv`. Prints, per angle, the median and 90th percentile of |measured - true| over
 the `ok` rows where both are defined, how many rows were `ok`, the sigma ratio
 median(|error| / stated sigma) / 0.6745 (1 for honest Gaussian 1-sigma errors), and the `ok`
-rows misread: an angle more than 5 stated sigma and more than 1 degree off.
+rows misread: an angle more than 5 stated sigma and more than 1 degree off. Where truth.csv has
+the angles as the camera shows them (`*_image_deg`, since session 15), "camera" is the median
+|image - table| over the same rows: the part of the error a perfect measurement in the image
+would still make without knowing the camera's tilt and distortion.
 """
 import csv
 import statistics
@@ -23,13 +26,16 @@ def report(folder, table):
     ok = [r for r in rows if r["status"] == "ok"]
     print(f"{folder}: {len(ok)}/{len(rows)} ok")
     for k in ["psi", "delta1", "delta2", "theta1", "theta2"]:
-        errs, pulls = [], []
+        errs, pulls, camera = [], [], []
         for r in ok:
             tv, mv = truth[r["file"]][f"{k}_deg"], r[f"{k}_deg"]
             if tv == "" or mv == "":
                 continue
             e = angle_error(float(mv), float(tv))
             errs.append(e)
+            iv = truth[r["file"]].get(f"{k}_image_deg", "")
+            if iv != "":
+                camera.append(angle_error(float(iv), float(tv)))
             if r[f"{k}_err_deg"]:
                 pulls.append(e / float(r[f"{k}_err_deg"]))
         if not errs:
@@ -38,7 +44,8 @@ def report(folder, table):
         errs.sort()
         p90 = errs[int(round(0.9 * (len(errs) - 1)))]
         ratio = statistics.median(pulls) / 0.6745 if pulls else float("nan")
-        print(f"  {k:7s} n {len(errs):3d}  median {statistics.median(errs):.3f}  p90 {p90:.3f}  sigma ratio {ratio:.2f}")
+        cam = f"  camera {statistics.median(camera):.3f}" if camera else ""
+        print(f"  {k:7s} n {len(errs):3d}  median {statistics.median(errs):.3f}  p90 {p90:.3f}  sigma ratio {ratio:.2f}{cam}")
     misread = []
     for r in ok:
         worst = None

@@ -361,3 +361,47 @@ fn painted_speed_is_continuous_along_each_path() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `*_image_deg` is what the camera shows: for a level camera without distortion (clean tier,
+/// with random rotation and mirroring) the image of the table is a similarity and the angles are
+/// the table's to rounding; a tilted, distorting camera (hard tier) moves them by at most a few
+/// tenths of a degree (2 % anisotropy at most: tilt ≤ 3° a third of the camera height off axis,
+/// `2 k1 r²` ≤ 2.4 %), and by some.
+#[test]
+fn image_angles_are_the_tables_for_a_level_camera() {
+    let dir = tmp_dir("image_angles");
+    let pairs = |tier: Tier, seed: u64| {
+        let folder = synth::plan_for(&small(&dir, tier, 12, seed)).unwrap();
+        let mut out = Vec::new();
+        for p in &folder.shots {
+            let frame = synth::build_frame(p);
+            let t = synth::truth_row(p, folder.tier, &folder.backdrop, &frame);
+            out.push((t.psi_deg, Some(t.psi_image_deg)));
+            out.push((t.delta1_deg.unwrap_or(f64::NAN), t.delta1_image_deg));
+            out.push((t.delta2_deg.unwrap_or(f64::NAN), t.delta2_image_deg));
+            out.push((t.theta1_deg.unwrap_or(f64::NAN), t.theta1_image_deg));
+            out.push((t.theta2_deg.unwrap_or(f64::NAN), t.theta2_image_deg));
+        }
+        out
+    };
+    let diff = |a: f64, b: f64| ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs();
+    let clean = pairs(Tier::Clean, 7);
+    assert!(clean.iter().any(|(_, b)| b.is_some()));
+    for (a, b) in &clean {
+        assert_eq!(a.is_nan(), b.is_none(), "defined alike: {a} {b:?}");
+        if let Some(b) = b {
+            assert!(diff(*a, *b) < 1e-6, "level camera: table {a}°, image {b}°");
+        }
+    }
+    let hard = pairs(Tier::Hard, 7);
+    let mut largest = 0f64;
+    for (a, b) in &hard {
+        if let Some(b) = b {
+            largest = largest.max(diff(*a, *b));
+        }
+    }
+    assert!(
+        largest > 0.01 && largest < 1.5,
+        "tilted, distorting camera: largest difference {largest}°"
+    );
+}

@@ -781,10 +781,60 @@ pub fn streak_samples(p: &ShotPlan) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The five angles as the camera shows them (degrees, same order and sign convention as the
+/// table's): each direction is mapped through the camera where the ball has it (the cue ball's
+/// incoming and start directions at `P`, the object ball's start at `O`, a rolling line by the
+/// image chord of its part within the exposure, or at its ball's start when it does not roll
+/// within it), all at ball-centre height, and measured from the image of the line of centres
+/// `P → O`. This is what an extractor that measures the image perfectly but knows nothing of the
+/// camera's tilt and distortion would read; it equals the table's angles for a level camera
+/// without distortion (a similarity). The difference is the camera's part of the error.
+fn image_angles(
+    p: &ShotPlan,
+    m: &Motion,
+    psi: f64,
+    table: [Option<f64>; 4],
+) -> (f64, [Option<f64>; 4]) {
+    let cam = &p.camera;
+    let h = m.radius;
+    let proj = |q: Vector2<f64>| cam.project(q, h);
+    let (pp, po) = (Vector2::zeros(), Vector2::new(2.0 * m.radius, 0.0));
+    let line = proj(po) - proj(pp);
+    let signed = |d: Vector2<f64>| (line.x * d.y - line.y * d.x).atan2(line.dot(&d));
+    // A step of a micrometre keeps the difference quotient's error far below 1e-9 rad.
+    let eps = 1e-6;
+    let at = |x: Vector2<f64>, a: f64| proj(x + eps * Vector2::new(a.cos(), a.sin())) - proj(x);
+    // The image of the frame's +y at P fixes the sense (mirroring, and v pointing down).
+    let sense = signed(at(pp, std::f64::consts::FRAC_PI_2)).signum();
+    let dir = |d: Vector2<f64>| (sense * signed(d)).to_degrees();
+    let exposure_left = m.t1;
+    let rolling = |path: &BallPath, x: Vector2<f64>, a: f64| {
+        let (ta, tb) = (path.t_slide, path.t_stop.min(exposure_left));
+        let chord = proj(path.position(tb)) - proj(path.position(ta));
+        if tb > ta && chord.norm() > 1.0 {
+            dir(chord)
+        } else {
+            dir(at(x, a))
+        }
+    };
+    let [d1, d2, t1, t2] = table.map(|v| v.map(f64::to_radians));
+    (
+        dir(at(pp, psi.to_radians())),
+        [
+            d1.map(|a| dir(at(pp, a))),
+            d2.map(|a| dir(at(po, a))),
+            t1.map(|a| rolling(&m.cue_out, pp, a)),
+            t2.map(|a| rolling(&m.object, po, a)),
+        ],
+    )
+}
+
 /// Ground truth of a planned shot; the contrast is computed on the noise-free model.
 pub fn truth_row(p: &ShotPlan, tier: Tier, bd: &Backdrop, frame: &Frame) -> TruthRow {
     let (m, state) = motion(p);
     let [d1, d2, t1, t2] = state.angles().to_degrees();
+    let (psi_image, [delta1_image, delta2_image, theta1_image, theta2_image]) =
+        image_angles(p, &m, p.shot.psi.to_degrees(), [d1, d2, t1, t2]);
     let cam = &p.camera;
     let impact = cam.project(Vector2::zeros(), m.radius);
     let object = cam.project(Vector2::new(2.0 * m.radius, 0.0), m.radius);
@@ -833,6 +883,11 @@ pub fn truth_row(p: &ShotPlan, tier: Tier, bd: &Backdrop, frame: &Frame) -> Trut
         stray_ball: p.stray.is_some(),
         tier: tier.name().to_string(),
         streak_contrast_grey: render::median(&mut diffs),
+        psi_image_deg: psi_image,
+        delta1_image_deg: delta1_image,
+        delta2_image_deg: delta2_image,
+        theta1_image_deg: theta1_image,
+        theta2_image_deg: theta2_image,
     }
 }
 

@@ -13,7 +13,7 @@
 //! line over the empty cloth (median along the streak).
 
 /// Column names of `truth.csv`, in order.
-pub const COLUMNS: [&str; 34] = [
+pub const COLUMNS: [&str; 39] = [
     "file",
     "material",
     "psi_deg",
@@ -48,6 +48,11 @@ pub const COLUMNS: [&str; 34] = [
     "stray_ball",
     "tier",
     "streak_contrast_grey",
+    "psi_image_deg",
+    "delta1_image_deg",
+    "delta2_image_deg",
+    "theta1_image_deg",
+    "theta2_image_deg",
 ];
 
 /// One row of `truth.csv`.
@@ -88,6 +93,13 @@ pub struct TruthRow {
     pub stray_ball: bool,
     pub tier: String,
     pub streak_contrast_grey: Option<f64>,
+    /// The angles as the camera shows them (`synth::image_angles`): what a perfect measurement in
+    /// the image reads without knowing the camera's tilt and distortion.
+    pub psi_image_deg: f64,
+    pub delta1_image_deg: Option<f64>,
+    pub delta2_image_deg: Option<f64>,
+    pub theta1_image_deg: Option<f64>,
+    pub theta2_image_deg: Option<f64>,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -142,6 +154,11 @@ impl TruthRow {
             self.stray_ball.to_string(),
             field(&self.tier),
             opt(self.streak_contrast_grey),
+            self.psi_image_deg.to_string(),
+            opt(self.delta1_image_deg),
+            opt(self.delta2_image_deg),
+            opt(self.theta1_image_deg),
+            opt(self.theta2_image_deg),
         ]
     }
 }
