@@ -10,7 +10,10 @@
 //! the on-screen counter-clockwise angle of the impact frame's `x` axis from the image's `+x`
 //! axis; `mirrored = true` means the frame's `y` axis is `x` turned clockwise on screen.
 //! `streak_contrast_grey` is the noise-free luma contrast of the incoming cue-ball streak's centre
-//! line over the empty cloth (median along the streak).
+//! line over the empty cloth (median along the streak). `*_image_deg` are the five angles as the
+//! camera shows them (`synth::image_angles`): the same directions mapped through the tilted,
+//! distorting camera and measured in the image, so `|image − table|` is the camera's part of an
+//! extractor's error.
 
 /// Column names of `truth.csv`, in order.
 pub const COLUMNS: [&str; 39] = [
