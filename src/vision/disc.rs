@@ -279,80 +279,6 @@ fn half_level_crossing(prof: &[f32], r_in: f64, step: f64, re0: f64) -> Option<f
     None
 }
 
-/// Edge (along one ray) that conserves the light: the profile's area above the cloth over a
-/// window of ±[`AREA_HALF`] px around the steepest descent `re0` equals that of an ideal rim, a
-/// Lambert limb `a + b √(E − ρ)` inside `E` and the cloth beyond. Blur (lens, antialiasing,
-/// sampling) moves light but keeps its amount, so the edge does not depend on it; the limb is
-/// fitted 1.5 px and more inside `E`, where blur has not reached, and `E` and the limb are
-/// iterated together. `None` when the window leaves the profile or the levels are degenerate.
-fn area_edge(prof: &[f32], r_in: f64, step: f64, re0: f64) -> Option<f64> {
-    let at = |i: usize| r_in + step * i as f64;
-    let idx = |rr: f64| ((rr - r_in) / step).round();
-    let (lo, hi) = (idx(re0 - AREA_HALF), idx(re0 + AREA_HALF));
-    if lo < 0.0 || hi as usize >= prof.len() {
-        return None;
-    }
-    let (lo, hi) = (lo as usize, hi as usize);
-    // Cloth level beyond the edge: a line through 1.5–3.5 px outside.
-    let out: Vec<(f64, f64)> = (lo..=hi)
-        .filter(|&i| (1.5..=3.5).contains(&(at(i) - re0)))
-        .map(|i| (at(i) - re0, prof[i] as f64))
-        .collect();
-    let line = |pts: &[(f64, f64)]| -> Option<(f64, f64)> {
-        let n = pts.len() as f64;
-        if n < 3.0 {
-            return None;
-        }
-        let (mx, my) = pts
-            .iter()
-            .fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
-        let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-        let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-        let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-        Some((my - b * mx, b))
-    };
-    let (c0, c1) = line(&out)?;
-    let cloth = |r: f64| c0 + c1 * (r - re0);
-    // Light above the cloth in the window, each sample standing for `step` px.
-    let (l, u) = (at(lo) - 0.5 * step, at(hi) + 0.5 * step);
-    let area: f64 = (lo..=hi)
-        .map(|i| (prof[i] as f64 - cloth(at(i))) * step)
-        .sum();
-    let cloth_area = |e: f64| c0 * (e - l) + 0.5 * c1 * ((e - re0).powi(2) - (l - re0).powi(2));
-    let mut e = re0;
-    for _ in 0..4 {
-        // Limb `a + b √(e − ρ)` over the samples 1.5 px and more inside `e`.
-        let pts: Vec<(f64, f64)> = (lo..=hi)
-            .filter(|&i| at(i) <= e - 1.5)
-            .map(|i| ((e - at(i)).sqrt(), prof[i] as f64))
-            .collect();
-        let (a, b) = line(&pts)?;
-        // Ideal area above the cloth from `l` to `x`: ∫ (a + b √(x − ρ)) dρ − ∫ cloth.
-        let ideal = |x: f64| {
-            let w = (x - l).max(0.0);
-            a * w + 2.0 / 3.0 * b * w.powf(1.5) - cloth_area(x)
-        };
-        // The ideal area grows with the edge (the limb stays above the cloth): bisection.
-        let (mut x0, mut x1) = (re0 - 1.5, (re0 + 1.5).min(u));
-        if (ideal(x0) - area) * (ideal(x1) - area) > 0.0 {
-            return None;
-        }
-        for _ in 0..40 {
-            let xm = 0.5 * (x0 + x1);
-            if (ideal(xm) - area) * (ideal(x0) - area) <= 0.0 {
-                x1 = xm;
-            } else {
-                x0 = xm;
-            }
-        }
-        e = 0.5 * (x0 + x1);
-    }
-    Some(e)
-}
-
-/// Half-width (px) of the window over which [`area_edge`] balances the light.
-const AREA_HALF: f64 = 4.0;
-
 /// Sub-pixel circle fit to the disc edge at full resolution.
 pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
     let (mut cx, mut cy, mut r) = (c.cx, c.cy, c.r);
@@ -418,9 +344,7 @@ pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
             // the levels just inside and just outside, each extrapolated to the edge by a line
             // through 1.5–3.5 px on its side (as close as the 1-px antialiased edge allows: the
             // limb of a shaded ball falls off like a square root, which a wider window misjudges).
-            let re = area_edge(&prof, r_in, step, re0)
-                .or_else(|| half_level_crossing(&prof, r_in, step, re0))
-                .unwrap_or(re0);
+            let re = half_level_crossing(&prof, r_in, step, re0).unwrap_or(re0);
             let inside: f32 = prof[..n_s / 5].iter().sum::<f32>() / (n_s / 5) as f32;
             let outside: f32 = prof[n_s - n_s / 6..].iter().sum::<f32>() / (n_s / 6) as f32;
             edges.push((cx + re * ca, cy + re * sa));
