@@ -9,7 +9,8 @@ median(|error| / stated sigma) / 0.6745 (1 for honest Gaussian 1-sigma errors), 
 rows misread: an angle more than 5 stated sigma and more than 1 degree off. Where truth.csv has
 the angles as the camera shows them (`*_image_deg`, since session 15), "camera" is the median
 |image - table| over the same rows: the part of the error a perfect measurement in the image
-would still make without knowing the camera's tilt and distortion.
+would still make without knowing the camera's tilt and distortion. "radius" is the median
+signed error of the fitted ball radius in px.
 """
 import csv
 import statistics
@@ -46,6 +47,12 @@ def report(folder, table):
         ratio = statistics.median(pulls) / 0.6745 if pulls else float("nan")
         cam = f"  camera {statistics.median(camera):.3f}" if camera else ""
         print(f"  {k:7s} n {len(errs):3d}  median {statistics.median(errs):.3f}  p90 {p90:.3f}  sigma ratio {ratio:.2f}{cam}")
+    # Signed error of the joint fit's ball radius: the impact point sits 2R from the disc's
+    # centre, so a bias here moves P along the line of centres (journal, session 15).
+    dr = [float(r["ball_radius_px"]) - float(truth[r["file"]]["ball_radius_px"])
+          for r in ok if r.get("ball_radius_px")]
+    if dr:
+        print(f"  radius  n {len(dr):3d}  median signed error {statistics.median(dr):+.3f} px")
     misread = []
     for r in ok:
         worst = None
