@@ -807,9 +807,9 @@ fn image_angles(
     // The image of the frame's +y at P fixes the sense (mirroring, and v pointing down).
     let sense = signed(at(pp, std::f64::consts::FRAC_PI_2)).signum();
     let dir = |d: Vector2<f64>| (sense * signed(d)).to_degrees();
-    let exposure_left = m.t1;
     let rolling = |path: &BallPath, x: Vector2<f64>, a: f64| {
-        let (ta, tb) = (path.t_slide, path.t_stop.min(exposure_left));
+        // `m.t1`: the end of the exposure, in time after the impact.
+        let (ta, tb) = (path.t_slide, path.t_stop.min(m.t1));
         let chord = proj(path.position(tb)) - proj(path.position(ta));
         if tb > ta && chord.norm() > 1.0 {
             dir(chord)

@@ -223,7 +223,8 @@ pub fn robust_cov_inv(d: &[[f32; 3]]) -> [[f64; 3]; 3] {
     use nalgebra::{Matrix3, Vector3};
     let chans: [Vec<f32>; 3] = [0, 1, 2].map(|c| d.iter().map(|v| v[c]).collect());
     let med: [f64; 3] = [0, 1, 2].map(|c| median_of(&chans[c]) as f64);
-    let sd: [f64; 3] = [0, 1, 2].map(|c| (mad_sigma(&chans[c]) as f64).max(1e-9));
+    let sd: [f64; 3] =
+        [0, 1, 2].map(|c| (mad_sigma_about(&chans[c], med[c] as f32) as f64).max(1e-9));
     let mut inv = Matrix3::from_diagonal(&Vector3::new(
         1.0 / (sd[0] * sd[0]),
         1.0 / (sd[1] * sd[1]),

@@ -17,7 +17,8 @@
 //! surface.
 
 use super::background::{
-    block_mean, box_blur, eval_surface, fit_cloth_poly, mad_sigma, median, median_of,
+    block_mean, box_blur, eval_surface, fit_cloth_poly, mad_sigma, mad_sigma_about, median,
+    median_of,
 };
 use super::image_io::RgbImage;
 use rayon::prelude::*;
@@ -115,7 +116,7 @@ pub fn residual(img: &RgbImage, coarse_side: usize) -> Residual {
     let side = tw.max(th);
     let sm = box_blur(&a, tw, th, (side / 150).max(1));
     let level = median_of(&sm);
-    let thr = level + 5.0 * mad_sigma(&sm).max(1e-6);
+    let thr = level + 5.0 * mad_sigma_about(&sm, level).max(1e-6);
     let hot: Vec<f32> = sm.iter().map(|&v| f32::from(v > thr)).collect();
     let rd = (side / 60).max(1);
     let near = box_blur(&hot, tw, th, rd);
