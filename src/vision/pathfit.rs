@@ -989,25 +989,56 @@ fn convert(
     out
 }
 
-/// `(J'ᵀ J')⁻¹`, except that a parameter no residual depends on (an all-zero Jacobian column,
-/// e.g. the parabola's length `L1` when every sample lies on the rolling line) is undetermined:
-/// infinite variance, no covariance, and the rest inverted without it.
+/// `(J'ᵀ J')⁻¹`, except where the fit does not determine a parameter: one that no residual
+/// depends on (an all-zero Jacobian column, e.g. the parabola's length `L1` when every sample
+/// lies on the rolling line), or one with a part along a direction in which the normal matrix
+/// is singular to working precision, gets infinite variance and no covariance; the rest is
+/// the inverse on the determined directions.
+///
+/// The matrix is scaled to a unit diagonal first (the parameters span pixels of position,
+/// radians and lengths) and inverted through its eigen-decomposition: a plain inverse of a
+/// numerically singular matrix (an arc's legs trading against each other) gave well-determined
+/// parameters such as `psi` variances of either sign, which were reported as infinite.
 fn covariance(a: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     let k = a.nrows();
     let keep: Vec<usize> = (0..k).filter(|&i| a[(i, i)] > 0.0).collect();
-    let sub = DMatrix::from_fn(keep.len(), keep.len(), |r, c| a[(keep[r], keep[c])]);
-    let inv = sub.try_inverse()?;
+    let d: Vec<f64> = keep.iter().map(|&i| a[(i, i)].sqrt()).collect();
+    let n = keep.len();
+    let sub = DMatrix::from_fn(n, n, |r, c| {
+        0.5 * (a[(keep[r], keep[c])] + a[(keep[c], keep[r])]) / (d[r] * d[c])
+    });
+    if sub.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let eig = nalgebra::SymmetricEigen::new(sub);
+    let (v, lambda) = (&eig.eigenvectors, &eig.eigenvalues);
+    let null: Vec<usize> = (0..n)
+        .filter(|&j| lambda[j] < SINGULAR_EIGENVALUE)
+        .collect();
+    let undetermined: Vec<bool> = (0..n)
+        .map(|r| null.iter().map(|&j| v[(r, j)].powi(2)).sum::<f64>() > NULL_WEIGHT)
+        .collect();
     let mut cov = DMatrix::zeros(k, k);
     for i in 0..k {
         cov[(i, i)] = f64::INFINITY;
     }
-    for (r, &i) in keep.iter().enumerate() {
-        for (c, &j) in keep.iter().enumerate() {
-            cov[(i, j)] = inv[(r, c)];
+    for r in (0..n).filter(|&r| !undetermined[r]) {
+        for c in (0..n).filter(|&c| !undetermined[c]) {
+            let s: f64 = (0..n)
+                .filter(|&j| lambda[j] >= SINGULAR_EIGENVALUE)
+                .map(|j| v[(r, j)] * v[(c, j)] / lambda[j])
+                .sum();
+            cov[(keep[r], keep[c])] = s / (d[r] * d[c]);
         }
     }
     Some(cov)
 }
+
+/// Eigenvalue of the unit-diagonal normal matrix below which its direction is undetermined
+/// (a correlation of 1 − 10⁻¹⁰ between two parameters), and the weight on such directions
+/// above which a parameter is.
+const SINGULAR_EIGENVALUE: f64 = 1e-10;
+const NULL_WEIGHT: f64 = 1e-6;
 
 /// Farthest the profile of a start tangent is walked (radians): beyond it the angle counts as
 /// undetermined.
@@ -1573,6 +1604,36 @@ mod tests {
         assert!((cov[(0, 0)] - 2.0 / 7.0).abs() < 1e-15);
         assert!((cov[(0, 2)] + 1.0 / 7.0).abs() < 1e-15);
         assert!((cov[(2, 2)] - 4.0 / 7.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn covariance_keeps_a_determined_parameter_beside_a_degenerate_pair() {
+        // Parameters 1 and 2 enter only as their sum 1e3·x1 + x2 (a position in px and a leg
+        // trading against it): the pair is undetermined, parameter 0 (an angle, scale 1) is
+        // determined and coupled to neither: its variance is 1/a00 whatever the pair does.
+        let (s1, s2) = (1e3, 1.0);
+        let mut a = DMatrix::<f64>::zeros(3, 3);
+        a[(0, 0)] = 2.5e4;
+        for (i, si) in [(1, s1), (2, s2)] {
+            for (j, sj) in [(1, s1), (2, s2)] {
+                a[(i, j)] = 7.0 * si * sj;
+            }
+        }
+        let cov = covariance(&a).unwrap();
+        assert!((cov[(0, 0)] * 2.5e4 - 1.0).abs() < 1e-12, "{}", cov[(0, 0)]);
+        assert!(cov[(1, 1)].is_infinite() && cov[(2, 2)].is_infinite());
+        // Badly scaled but determined (unit-diagonal correlations 0.3, 0.1, 0.2): the inverse
+        // to working precision, entry (i, j) of b·cov measured in units of d_i / d_j.
+        let b = DMatrix::from_row_slice(3, 3, &[1e8, 3e3, 1e-1, 3e3, 1.0, 2e-5, 1e-1, 2e-5, 1e-8]);
+        let cov = covariance(&b).unwrap();
+        let id = &b * &cov;
+        let d = [1e4, 1.0, 1e-4];
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((id[(i, j)] - want).abs() * d[j] / d[i] < 1e-12, "{id}");
+            }
+        }
     }
 
     #[test]
