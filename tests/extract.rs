@@ -257,7 +257,11 @@ fn folder_texture_without_plate() {
 /// theta2 are measured. Full size with a plate, as the README's table. Measured 2026-11-24 on
 /// this set (seed 41): 6/8 ok, psi errors 0.001–0.05° but one of 0.82°, theta2 0.002–0.04°
 /// but one of 0.60° (the same shot); before the swap every ok row measured theta2 on the cue
-/// ball's incoming streak (0.5–1.8° off at stated sigmas of 0.05–0.1°).
+/// ball's incoming streak (0.5–1.8° off at stated sigmas of 0.05–0.1°). Since the resting
+/// ball's rim is integrated over each pixel (2026-11-25): 7/8 ok, psi 0.001–0.13° but one of
+/// 0.25°; theta2 0.002–0.07° on six, and on shot_006 not resolved (its object ball's path fits
+/// best as a near-straight parabola whose rolling line is undetermined; as a line it read 1.2°
+/// off at a stated 0.38°, so "not resolved" is the honest answer).
 #[test]
 fn head_on_stun_shots_stop_the_cue_ball() {
     let dir = scratch("head_on");
@@ -293,8 +297,17 @@ fn head_on_stun_shots_stop_the_cue_ball() {
         let tr = &t[&r.file];
         let err = |v: Option<f64>, k: &str| (v.unwrap() - tr[k].parse::<f64>().unwrap()).abs();
         psi.push(err(r.psi_deg, "psi_deg"));
-        theta2.push(err(r.theta2_deg, "theta2_deg"));
+        if r.theta2_deg.is_some() {
+            theta2.push(err(r.theta2_deg, "theta2_deg"));
+        } else {
+            assert!(r.reason.contains("theta2 not resolved"), "{r:#?}");
+        }
     }
+    assert!(
+        theta2.len() >= 5,
+        "theta2 measured on {} rows",
+        theta2.len()
+    );
     assert!(median(psi.clone()) < 0.1, "psi errors {psi:?}");
     assert!(median(theta2.clone()) < 0.1, "theta2 errors {theta2:?}");
 }
