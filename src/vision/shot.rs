@@ -654,6 +654,14 @@ fn time_arrow(samples: &[Sample], s: (f64, f64), r: f64) -> Option<f64> {
     (a.abs() > 1e-12).then(|| b / a.abs())
 }
 
+/// Largest brightening per ball radius away from P ([`time_arrow`]) of a streak read as the
+/// incoming one. An arriving ball is faster the farther back it was, so its light fades away
+/// from P (−0.1 to −0.6 % per R on clean synthetic sets); illumination gradients and vignetting
+/// tilt that by up to +18 % per R on the realistic sets. A ball coming to rest within a few radii
+/// brightens without bound (+1700 % per R measured: a drawn cue ball's way back, read as the
+/// incoming streak, psi 6.9° off at a stated 0.28°).
+const INCOMING_ARROW_MAX: f64 = 1.0;
+
 /// Fraction of the object disc's contrast that [`rim_at`] must reach for a ball at rest at P.
 const REST_RIM: f64 = 0.3;
 
@@ -1227,6 +1235,20 @@ fn read_from_disc(
     }
     for (i, s) in out.streaks.iter_mut().enumerate() {
         s.1 = measured[i].clone();
+    }
+    // The incoming ball rolls towards P, faster the farther back it was: its light cannot grow
+    // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
+    // the incoming streak when the real one is too faint to find).
+    if let Some(arrow) = time_arrow(&measured[reading.inc], p_imp, r)
+        && arrow > INCOMING_ARROW_MAX
+    {
+        out.reason = format!(
+            "the streak read as the incoming cue ball's comes to rest away from the impact point \
+             (its light grows {:.0} % per ball radius away from it): it is a ball leaving, and \
+             the incoming streak was not found",
+            100.0 * arrow
+        );
+        return out;
     }
     // A cue ball resting against the object ball: a white cue ball is the brighter disc, and
     // the light alone is symmetric in time (a ball arrives and stops, the other leaves), except
