@@ -11,8 +11,10 @@
 //! neighbouring rays (at least the rays' own `σ_r / sqrt(n)`): neighbouring edges share pixels.
 //! The edge of a shaded ball is read short (the half-level rule extrapolates the limb's level
 //! with a line, and a Lambert limb falls like `√(R − ρ)`): −0.034 to −0.036 px with the light
-//! straight above, −0.003 to −0.006 px oblique, at R ≈ 98 px (the tests below); the joint fit
-//! adds that as a systematic part of `σ_R` ([`RADIUS_SYSTEMATIC_PX`]).
+//! straight above, −0.003 to −0.006 px oblique, at R ≈ 98 px (the tests below). That bias is
+//! not in `σ_R`: added to the joint fit's prior as 0.02 px (tried), it let a path model that
+//! misfits (a short straight cue path forced through P) pull `R` by 13 sigma, and on 17
+//! synthetic sets it read one more row wrong and every angle slightly worse.
 
 use super::background::{Signal, box_blur, median};
 use nalgebra::{Matrix3, Vector3};
@@ -284,9 +286,6 @@ fn half_level_crossing(prof: &[f32], r_in: f64, step: f64, re0: f64) -> Option<f
     None
 }
 
-/// Systematic part of the radius's uncertainty (px): the spread of the half-level rule's bias
-/// over lights from straight above to oblique (module doc).
-pub const RADIUS_SYSTEMATIC_PX: f64 = 0.02;
 /// Rays per block for the radius's standard error.
 const BLOCK_RAYS: usize = 16;
 

@@ -1298,7 +1298,7 @@ fn read_from_disc(
         o_meas: o,
         sigma_o: dsc.sigma_c.max(0.02),
         r_meas: r,
-        sigma_r: dsc.sigma_r.hypot(disc::RADIUS_SYSTEMATIC_PX),
+        sigma_r: dsc.sigma_r.max(0.01),
         incoming: measured[reading.inc].clone(),
         out1: reading.b1.map(|b| measured[b].clone()),
         out2: measured[reading.b2].clone(),
