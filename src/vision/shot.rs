@@ -700,10 +700,10 @@ const OBJECT_THROW_MAX_DEG: f64 = 35.0;
 /// and checked on seed 202 (clean and realistic: 0.78–1.15, were 0.64–0.78); see
 /// `docs/accuracy.sh`. Refitted in session 16, after the renderer's resting-ball rims became
 /// physical (the object ball's radius error fell from −0.018 to −0.008 px, and with it the errors
-/// the floor of 0.032° had covered) and the disc's radius gained its systematic sigma: the
-/// floor fell to 0.010° (same sets: ratios 0.70–1.18, were 0.53–1.16 with the old floor; checked
-/// on seeds 202 and 303, clean, clean + plate, realistic and mixed spin: 0.71–1.14, were
-/// 0.61–0.96). The scale stays (1.25 and 1.45 fitted worse).
+/// the floor of 0.032° had covered): the floor fell to 0.010° (same sets: ratios 0.76–1.17, were
+/// 0.58–1.17 with the old floor; checked on seeds 202 and 303, clean, clean + plate, realistic
+/// and mixed spin: 0.77–1.22). The scale stays (1.25 and 1.45 fitted worse; no floor fits the
+/// fitting sets a little better and the check sets worse).
 pub fn calibrated_sd(sd: f64) -> f64 {
     (SIGMA_SCALE * sd).hypot(SIGMA_FLOOR_DEG.to_radians())
 }
