@@ -983,6 +983,8 @@ struct Selected {
     kept: Vec<Vec<Sample>>,
     /// Each streak's colour direction (ball minus cloth).
     colours: Vec<[f32; 3]>,
+    /// Whether a streak's clean samples come from the narrow margin ([`CLEAR_NARROW_R`]).
+    narrow: Vec<bool>,
 }
 
 /// A tracked candidate: its centre-line samples and its colour direction.
@@ -1023,8 +1025,15 @@ fn track_candidates(
         .collect()
 }
 
+/// Distance (in R) from another streak's samples, or from its extension towards the disc, within
+/// which a sample is not clean for the scene reading; the narrow one where the wide one would
+/// leave a streak fewer than five samples.
+const CLEAR_WIDE_R: f64 = 2.6;
+const CLEAR_NARROW_R: f64 = 1.6;
+const CLEAR_NARROW_MIN_ANGLE_DEG: f64 = 55.0;
+
 /// Keeps up to three distinct streaks of the tracked candidates (see [`Selected`]).
-fn select_streaks(tracked: Vec<Tracked>, r: f64) -> Selected {
+fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bool) -> Selected {
     let track_u: Vec<[f32; 3]> = tracked.iter().map(|t| t.1).collect();
     let mut tracks: Vec<Vec<Sample>> = tracked.into_iter().map(|t| t.0).collect();
     // Two candidates can track the same streak (inner and outer ring): keep the longer.
@@ -1064,45 +1073,96 @@ fn select_streaks(tracked: Vec<Tracked>, r: f64) -> Selected {
         .collect();
     // Drop samples whose profile window reaches into another streak (near the impact, crossings);
     // this first cut only serves the scene reading, the fit uses re-measured samples below.
-    let clean: Vec<Vec<Sample>> = (0..tracks.len())
-        .map(|a| {
-            tracks[a]
-                .iter()
-                .filter(|s| {
-                    tracks.iter().enumerate().all(|(b, tb)| {
-                        if a == b || tb.is_empty() {
-                            return true;
-                        }
-                        let near = tb.iter().any(|q| (q.x - s.x).hypot(q.y - s.y) < 2.6 * r);
-                        // Extension of the other streak towards the disc (where it was not tracked).
-                        let f = tb[0];
-                        let g = tb[(tb.len() / 4).max(1).min(tb.len() - 1)];
-                        let l = (f.x - g.x).hypot(f.y - g.y).max(1e-9);
-                        let e = ((f.x - g.x) / l, (f.y - g.y) / l);
-                        let (wx, wy) = (s.x - f.x, s.y - f.y);
-                        let along = wx * e.0 + wy * e.1;
-                        let ext = (0.0..4.0 * r).contains(&along)
-                            && (e.0 * wy - e.1 * wx).abs() < 2.6 * r;
-                        !(near || ext)
-                    })
+    let cut = |a: usize, k: f64| -> Vec<Sample> {
+        tracks[a]
+            .iter()
+            .filter(|s| k >= CLEAR_WIDE_R || (s.x - o.0).hypot(s.y - o.1) >= (k + 1.0) * r)
+            .filter(|s| {
+                tracks.iter().enumerate().all(|(b, tb)| {
+                    if a == b || tb.is_empty() {
+                        return true;
+                    }
+                    let near = tb.iter().any(|q| (q.x - s.x).hypot(q.y - s.y) < k * r);
+                    // Extension of the other streak towards the disc (where it was not tracked).
+                    let f = tb[0];
+                    let g = tb[(tb.len() / 4).max(1).min(tb.len() - 1)];
+                    let l = (f.x - g.x).hypot(f.y - g.y).max(1e-9);
+                    let e = ((f.x - g.x) / l, (f.y - g.y) / l);
+                    let (wx, wy) = (s.x - f.x, s.y - f.y);
+                    let along = wx * e.0 + wy * e.1;
+                    // Every ball's light ends before the foot of the perpendicular from the
+                    // disc's centre: the object ball starts there, the cue ball at P, which lies
+                    // 2R cos psi short of it. Beyond it (and a ball's radius) the extension is
+                    // dark; cutting there took away the start of a stunned cue ball's short path,
+                    // which leaves P across the object ball's line.
+                    let foot = (o.0 - f.x) * e.0 + (o.1 - f.y) * e.1;
+                    let reach = if k < CLEAR_WIDE_R {
+                        (4.0 * r).min(foot.max(0.0) + 1.1 * r)
+                    } else {
+                        4.0 * r
+                    };
+                    let ext = (0.0..reach).contains(&along) && (e.0 * wy - e.1 * wx).abs() < k * r;
+                    !(near || ext)
                 })
-                .copied()
-                .collect()
+            })
+            .copied()
+            .collect()
+    };
+    // Least angle between track `a`'s line and every other track's is at least
+    // [`CLEAR_NARROW_MIN_ANGLE_DEG`].
+    let lines: Vec<Option<Line>> = tracks.iter().map(|t| fit_line(t)).collect();
+    let crosses = |a: usize| {
+        let Some(la) = lines[a] else { return false };
+        lines.iter().enumerate().all(|(b, lb)| {
+            b == a
+                || lb.is_none_or(|lb| {
+                    let c = (la.d.0 * lb.d.0 + la.d.1 * lb.d.1).abs().min(1.0);
+                    c.acos() >= CLEAR_NARROW_MIN_ANGLE_DEG.to_radians()
+                })
         })
-        .collect();
-    let mut pairs: Vec<(Vec<Sample>, Vec<Sample>, [f32; 3])> = tracks
-        .drain(..)
-        .zip(clean)
-        .zip(track_u)
-        .map(|((t, c), u)| (t, c, u))
-        .filter(|(_, c, _)| c.len() >= 5)
-        .collect();
-    pairs.sort_by_key(|(_, c, _)| std::cmp::Reverse(c.len()));
-    pairs.truncate(3);
-    let raw: Vec<Vec<Sample>> = pairs.iter().map(|p| p.0.clone()).collect();
-    let colours: Vec<[f32; 3]> = pairs.iter().map(|p| p.2).collect();
-    let kept: Vec<Vec<Sample>> = pairs.into_iter().map(|p| p.1).collect();
-    Selected { raw, kept, colours }
+    };
+    // A short streak wholly within the wide margin of another (a stunned cue ball that stops a
+    // few radii from P) keeps the samples clear of the narrow one: its profile window (± 1.5 R)
+    // then just misses the other ball's light.
+    let (clean, narrow): (Vec<Vec<Sample>>, Vec<bool>) = (0..tracks.len())
+        .map(|a| {
+            let wide = cut(a, CLEAR_WIDE_R);
+            if allow_narrow && wide.len() < 5 && tracks[a].len() >= FAINT_MIN_SAMPLES && crosses(a)
+            {
+                (cut(a, CLEAR_NARROW_R), true)
+            } else {
+                (wide, false)
+            }
+        })
+        .unzip();
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        for (t, c) in tracks.iter().zip(&clean) {
+            let (f, l) = (t[0], t[t.len() - 1]);
+            eprintln!(
+                "select: {} samples ({:.0},{:.0})-({:.0},{:.0}), {} clean",
+                t.len(),
+                f.x,
+                f.y,
+                l.x,
+                l.y,
+                c.len()
+            );
+        }
+    }
+    // Up to three streaks, the longest clean first (a stable sort: ties keep the tracking order).
+    let mut order: Vec<usize> = (0..tracks.len()).filter(|&a| clean[a].len() >= 5).collect();
+    order.sort_by_key(|&a| std::cmp::Reverse(clean[a].len()));
+    order.truncate(3);
+    let raw: Vec<Vec<Sample>> = order.iter().map(|&a| tracks[a].clone()).collect();
+    let colours: Vec<[f32; 3]> = order.iter().map(|&a| track_u[a]).collect();
+    let kept: Vec<Vec<Sample>> = order.iter().map(|&a| clean[a].clone()).collect();
+    let narrow: Vec<bool> = order.iter().map(|&a| narrow[a]).collect();
+    Selected {
+        raw,
+        kept,
+        colours,
+        narrow,
+    }
 }
 
 /// The scene read around the object ball's disc `dsc`. `second_disc` is set when this disc was
@@ -1112,6 +1172,52 @@ fn read_from_disc(
     dsc: disc::Disc,
     opts: &AnalysisOptions,
     second_disc: bool,
+) -> Analysis {
+    let (a, narrow) = read_streaks(sig, dsc.clone(), opts, second_disc, true);
+    // A streak kept only by the narrow margin must not cost a reading the others give alone,
+    // nor replace it with a loose one: a streak clear of the others for only a couple of radii
+    // is trusted when it pins its direction to [`NARROW_MAX_SD_DEG`].
+    let loose = [a.theta1_err_deg, a.theta2_err_deg]
+        .into_iter()
+        .flatten()
+        .any(|sd| sd > NARROW_MAX_SD_DEG);
+    if narrow && (a.status != Status::Ok || loose) {
+        let (b, _) = read_streaks(sig, dsc, opts, second_disc, false);
+        if b.status == Status::Ok {
+            return b;
+        }
+    }
+    a
+}
+
+/// Largest stated sigma (degrees) of a rolling direction read with the narrow margin when the
+/// wide one also gives a reading. The stunned cue balls it is for (psi 25–32°, stopping 3–4 R
+/// from P) pin theta1 to 0.02–0.06°; two at psi 16–18°, stopping within 2 R, read it 7.6° and
+/// 3.0° off at 0.7° and 0.6°: the centre-line samples of a short streak that brightens into a
+/// rest disc run along its edge, not its axis (seed 8 mixed shots 7 and 10).
+const NARROW_MAX_SD_DEG: f64 = 0.3;
+
+/// [`read_from_disc`] with or without the narrow margin ([`CLEAR_NARROW_R`]); also says whether
+/// a streak read in the scene was kept by it.
+fn read_streaks(
+    sig: &Signal,
+    dsc: disc::Disc,
+    opts: &AnalysisOptions,
+    second_disc: bool,
+    allow_narrow: bool,
+) -> (Analysis, bool) {
+    let mut narrow = false;
+    let a = read_body(sig, dsc, opts, second_disc, allow_narrow, &mut narrow);
+    (a, narrow)
+}
+
+fn read_body(
+    sig: &Signal,
+    dsc: disc::Disc,
+    opts: &AnalysisOptions,
+    second_disc: bool,
+    allow_narrow: bool,
+    used_narrow: &mut bool,
 ) -> Analysis {
     let mut out = Analysis::declined(Status::Declined, "");
     out.ball_radius_px = Some(dsc.r);
@@ -1133,16 +1239,22 @@ fn read_from_disc(
     }
     let ring = &cands[..cands.len().min(4)];
     let mut tracked = track_candidates(sig, ring, r, ko, opts);
-    let mut sel = select_streaks(tracked.clone(), r);
+    let mut sel = select_streaks(tracked.clone(), o, r, allow_narrow);
     if sel.kept.len() < 3 {
         // Fewer than three streaks crossed the rings: look for faint ones along their length.
         let faint = streak::find_faint(&map, o.0, o.1, ring);
         if !faint.is_empty() {
             tracked.extend(track_candidates(sig, &faint, r, ko, opts));
-            sel = select_streaks(tracked, r);
+            sel = select_streaks(tracked, o, r, allow_narrow);
         }
     }
-    let Selected { raw, kept, colours } = sel;
+    let Selected {
+        raw,
+        kept,
+        colours,
+        narrow,
+    } = sel;
+    *used_narrow = narrow.iter().any(|n| *n);
     out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
     let cue_stopped = match kept.len() {
         0 => {
