@@ -445,14 +445,13 @@ mod tests {
         FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
     }
 
-    /// `refine`'s radius error (px) on a rendered resting ball of radius `r` centred at
+    /// `refine`'s radius error (px) on a rendered white resting ball of radius `r` centred at
     /// renderer coordinates `c`, under `light`, with sensor noise `noise` (seeded) against a
     /// noise-free plate.
     fn radius_error(
         r: f64,
         c: (f64, f64),
         light: [f64; 3],
-        rgb: [f32; 3],
         noise: f64,
         seed: Option<u64>,
     ) -> (f64, Disc) {
@@ -464,7 +463,7 @@ mod tests {
                 c: [c.0, c.1],
                 r,
                 frac: 0.5,
-                rgb,
+                rgb: [0.86, 0.85, 0.8],
                 specular: 0.3,
             }],
         };
@@ -500,7 +499,7 @@ mod tests {
                 let runs: Vec<(f64, Disc)> = (1..=12u64)
                     .map(|s| {
                         let c = CENTRES[s as usize % 3];
-                        radius_error(98.37, c, l, [0.86, 0.85, 0.8], noise, Some(s))
+                        radius_error(98.37, c, l, noise, Some(s))
                     })
                     .collect();
                 let n = runs.len() as f64;

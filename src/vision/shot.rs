@@ -1173,7 +1173,23 @@ fn read_from_disc(
     opts: &AnalysisOptions,
     second_disc: bool,
 ) -> Analysis {
-    let (a, narrow) = read_streaks(sig, dsc.clone(), opts, second_disc, true);
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!(
+            "disc at ({:.1},{:.1}) r {:.1} contrast {:.3}",
+            dsc.cx, dsc.cy, dsc.r, dsc.contrast
+        );
+    }
+    let mut tracks = DiscTracks::new(sig, &dsc, opts);
+    let mut narrow = false;
+    let a = read_body(
+        sig,
+        dsc.clone(),
+        opts,
+        second_disc,
+        &mut tracks,
+        true,
+        &mut narrow,
+    );
     // A streak kept only by the narrow margin must not cost a reading the others give alone,
     // nor replace it with a loose one: a streak clear of the others for only a couple of radii
     // is trusted when it pins its direction to [`NARROW_MAX_SD_DEG`].
@@ -1182,7 +1198,7 @@ fn read_from_disc(
         .flatten()
         .any(|sd| sd > NARROW_MAX_SD_DEG);
     if narrow && (a.status != Status::Ok || loose) {
-        let (b, _) = read_streaks(sig, dsc, opts, second_disc, false);
+        let b = read_body(sig, dsc, opts, second_disc, &mut tracks, false, &mut narrow);
         if b.status == Status::Ok {
             return b;
         }
@@ -1197,25 +1213,59 @@ fn read_from_disc(
 /// rest disc run along its edge, not its axis (seed 8 mixed shots 7 and 10).
 const NARROW_MAX_SD_DEG: f64 = 0.3;
 
-/// [`read_from_disc`] with or without the narrow margin ([`CLEAR_NARROW_R`]); also says whether
-/// a streak read in the scene was kept by it.
-fn read_streaks(
-    sig: &Signal,
-    dsc: disc::Disc,
-    opts: &AnalysisOptions,
-    second_disc: bool,
-    allow_narrow: bool,
-) -> (Analysis, bool) {
-    let mut narrow = false;
-    let a = read_body(sig, dsc, opts, second_disc, allow_narrow, &mut narrow);
-    (a, narrow)
+/// The streaks tracked around a disc: those crossing its rings, and the faint ones along their
+/// length (searched for once, when a reading first finds fewer than three). Both readings of a
+/// disc, with and without the narrow margin ([`CLEAR_NARROW_R`]), select from the same tracks.
+struct DiscTracks {
+    map: streak::CoarseMap,
+    ring: Vec<streak::CoarseStreak>,
+    ko: KeepOut,
+    tracked: Vec<Tracked>,
+    faint: Option<Vec<Tracked>>,
 }
 
+impl DiscTracks {
+    fn new(sig: &Signal, dsc: &disc::Disc, opts: &AnalysisOptions) -> DiscTracks {
+        let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
+        let map = streak::CoarseMap::new(sig, r);
+        let mut ring = streak::find_coarse(&map, o.0, o.1);
+        ring.truncate(4);
+        let ko = KeepOut {
+            ox: o.0,
+            oy: o.1,
+            radius: 1.25 * r,
+        };
+        let tracked = track_candidates(sig, &ring, r, ko, opts);
+        DiscTracks {
+            map,
+            ring,
+            ko,
+            tracked,
+            faint: None,
+        }
+    }
+
+    /// The ring's tracks followed by the faint ones.
+    fn with_faint(&mut self, sig: &Signal, r: f64, opts: &AnalysisOptions) -> Vec<Tracked> {
+        let (map, ring, ko) = (&self.map, &self.ring, self.ko);
+        let faint = self.faint.get_or_insert_with(|| {
+            let found = streak::find_faint(map, ko.ox, ko.oy, ring);
+            track_candidates(sig, &found, r, ko, opts)
+        });
+        let mut all = self.tracked.clone();
+        all.extend(faint.iter().cloned());
+        all
+    }
+}
+
+/// The scene read around the disc from its tracks, with or without the narrow margin; sets
+/// `used_narrow` when a streak read in the scene was kept by it.
 fn read_body(
     sig: &Signal,
     dsc: disc::Disc,
     opts: &AnalysisOptions,
     second_disc: bool,
+    tracks: &mut DiscTracks,
     allow_narrow: bool,
     used_narrow: &mut bool,
 ) -> Analysis {
@@ -1223,29 +1273,13 @@ fn read_body(
     out.ball_radius_px = Some(dsc.r);
     let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
     out.disc = Some(dsc.clone());
-    let map = streak::CoarseMap::new(sig, r);
-    let cands = streak::find_coarse(&map, o.0, o.1);
-    let ko = KeepOut {
-        ox: o.0,
-        oy: o.1,
-        radius: 1.25 * r,
-    };
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
-    if debug {
-        eprintln!(
-            "disc at ({:.1},{:.1}) r {:.1} contrast {:.3}",
-            o.0, o.1, r, dsc.contrast
-        );
-    }
-    let ring = &cands[..cands.len().min(4)];
-    let mut tracked = track_candidates(sig, ring, r, ko, opts);
-    let mut sel = select_streaks(tracked.clone(), o, r, allow_narrow);
+    let mut sel = select_streaks(tracks.tracked.clone(), o, r, allow_narrow);
     if sel.kept.len() < 3 {
         // Fewer than three streaks crossed the rings: look for faint ones along their length.
-        let faint = streak::find_faint(&map, o.0, o.1, ring);
-        if !faint.is_empty() {
-            tracked.extend(track_candidates(sig, &faint, r, ko, opts));
-            sel = select_streaks(tracked, o, r, allow_narrow);
+        let all = tracks.with_faint(sig, r, opts);
+        if all.len() > tracks.tracked.len() {
+            sel = select_streaks(all, o, r, allow_narrow);
         }
     }
     let Selected {
