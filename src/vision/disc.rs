@@ -291,6 +291,19 @@ const BLOCK_RAYS: usize = 16;
 
 /// Sub-pixel circle fit to the disc edge at full resolution.
 pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
+    refine_excluding(sig, c, None)
+}
+
+/// [`refine`] from the rays facing away from `other` only (the centre of a second disc of the
+/// same ball, see [`companion`]): a ball that crept from one disc to the other swept the band
+/// between them, and every rim point of the half facing the other disc lies inside that band, so
+/// its edge there is the band's, not the disc's. At right angles to the axis the band's edge and
+/// the rim coincide, so the half-circle still fixes the radius (the disc's width) and the centre.
+pub fn refine_excluding(
+    sig: &Signal,
+    c: &CoarseDisc,
+    other: Option<(f64, f64)>,
+) -> Result<Disc, String> {
     let (mut cx, mut cy, mut r) = (c.cx, c.cy, c.r);
     let mut result = None;
     // Two passes: the second starts from the first fit, so rays are radial to the true centre.
@@ -305,6 +318,11 @@ pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
         for k in 0..n_rays {
             let a = 2.0 * std::f64::consts::PI * k as f64 / n_rays as f64;
             let (ca, sa) = (a.cos(), a.sin());
+            if let Some(q) = other
+                && ca * (q.0 - cx) + sa * (q.1 - cy) > 0.0
+            {
+                continue;
+            }
             let mut ok = true;
             for (i, p) in prof.iter_mut().enumerate() {
                 let rr = r_in + step * i as f64;
@@ -432,6 +450,159 @@ pub fn refine(sig: &Signal, c: &CoarseDisc) -> Result<Disc, String> {
         });
     }
     result.ok_or_else(|| "disc fit failed".into())
+}
+
+/// The object ball's two discs when it crept: at grazing incidence it leaves so slowly that it
+/// stops within a couple of diameters, and its waiting disc, the band it swept and its rest disc
+/// form one patch of light with no streak of its own.
+#[derive(Debug, Clone)]
+pub struct Companion {
+    /// The disc found first, refined from its rays facing away from the other.
+    pub first: Disc,
+    /// The other disc of the same ball.
+    pub second: Disc,
+}
+
+/// Least protrusion of the light past the disc's rim (in radii, and at least 4 px) for a ray
+/// to count as reaching into a second disc.
+const COMPANION_MIN_PROTRUSION_R: f64 = 0.06;
+/// Farthest edge of a second disc (radii from the first centre): its centre lies within two radii
+/// (a ball that crept further leaves a streak of its own, read as a path). Light reaching past
+/// it along a ray is a streak.
+const COMPANION_MAX_EXTENT_R: f64 = 3.3;
+/// Level (of the disc's contrast) above which a pixel past the rim is lit: a rest disc is exposed
+/// for at least about a fifth of the frame, the waiting one for about half.
+const COMPANION_LIT_LEVEL: f64 = 0.2;
+
+/// A second disc of the ball of `d` overlapping or touching it (see [`Companion`]), or `None`.
+/// Rays from the centre measure how far the light reaches past the rim; the rays that reach
+/// past it by [`COMPANION_MIN_PROTRUSION_R`] and end before [`COMPANION_MAX_EXTENT_R`] (a streak
+/// continues) must form one sector at least 30° wide, whose mean direction and greatest reach
+/// place the second disc's centre. Both discs are then refined from their outer halves
+/// ([`refine_excluding`]), and the second must have the first's radius within 3 %.
+pub fn companion(sig: &Signal, d: &Disc) -> Option<Companion> {
+    let (o, r) = ((d.cx, d.cy), d.r);
+    const N: usize = 180;
+    let tau = 2.0 * std::f64::consts::PI;
+    // Noise of a 5-sample mean, from a ring of cloth well outside both discs.
+    let mut ring: Vec<f32> = (0..256)
+        .filter_map(|k| {
+            let a = tau * k as f64 / 256.0;
+            sig.sample(o.0 + 4.2 * r * a.cos(), o.1 + 4.2 * r * a.sin())
+        })
+        .collect();
+    if ring.len() < 64 {
+        return None;
+    }
+    let cloth = median(&mut ring.clone()) as f64;
+    for v in ring.iter_mut() {
+        *v = (*v as f64 - cloth).abs() as f32;
+    }
+    let noise = 1.4826 * median(&mut ring) as f64 / 5f64.sqrt();
+    let lit = (COMPANION_LIT_LEVEL * d.contrast).max(4.0 * noise) + cloth;
+    let min_ext = (COMPANION_MIN_PROTRUSION_R * r).max(4.0);
+    // Protrusion of each ray past the rim (0 when none), or NaN when its light runs on (a streak).
+    let ext: Vec<f64> = (0..N)
+        .map(|k| {
+            let a = tau * k as f64 / N as f64;
+            let (ca, sa) = (a.cos(), a.sin());
+            let mut last = None;
+            let mut misses = 0;
+            let mut rr = r + 3.0;
+            while rr < (COMPANION_MAX_EXTENT_R + 0.3) * r {
+                let mut acc = 0.0;
+                for l in [-2.0, -1.0, 0.0, 1.0, 2.0] {
+                    let x = o.0 + rr * ca - l * sa;
+                    let y = o.1 + rr * sa + l * ca;
+                    match sig.sample(x, y) {
+                        Some(v) => acc += v as f64 / 5.0,
+                        None => return 0.0,
+                    }
+                }
+                if acc > lit {
+                    last = Some(rr);
+                    misses = 0;
+                } else {
+                    misses += 1;
+                    if misses > 3 {
+                        break;
+                    }
+                }
+                rr += 1.0;
+            }
+            match last {
+                Some(e) if e > COMPANION_MAX_EXTENT_R * r => f64::NAN,
+                Some(e) if e - r >= min_ext => e - r,
+                _ => 0.0,
+            }
+        })
+        .collect();
+    // The longest circular run of protruding rays.
+    let on = |k: usize| ext[k % N] > 0.0;
+    let start = (0..N).find(|&k| !on(k))?;
+    let (mut best, mut k) = ((0usize, 0usize), 0usize);
+    while k < N {
+        let i = start + k;
+        if on(i) {
+            let mut j = i;
+            while j < start + N && on(j) {
+                j += 1;
+            }
+            if j - i > best.1 - best.0 {
+                best = (i, j);
+            }
+            k = j - start;
+        } else {
+            k += 1;
+        }
+    }
+    if ((best.1 - best.0) as f64) < 30.0 / 360.0 * N as f64 {
+        return None;
+    }
+    let (mut sx, mut sy, mut reach) = (0.0, 0.0, 0.0f64);
+    for i in best.0..best.1 {
+        let a = tau * (i % N) as f64 / N as f64;
+        let e = ext[i % N];
+        sx += e * a.cos();
+        sy += e * a.sin();
+        reach = reach.max(e);
+    }
+    let phi = sy.atan2(sx);
+    let q0 = (o.0 + reach * phi.cos(), o.1 + reach * phi.sin());
+    let coarse = |c: (f64, f64)| CoarseDisc {
+        cx: c.0,
+        cy: c.1,
+        r,
+        level: d.contrast as f32,
+        elongation: 1.0,
+    };
+    let second = refine_excluding(sig, &coarse(q0), Some(o)).ok()?;
+    let first = refine_excluding(sig, &coarse(o), Some((second.cx, second.cy))).ok()?;
+    let second = refine_excluding(
+        sig,
+        &coarse((second.cx, second.cy)),
+        Some((first.cx, first.cy)),
+    )
+    .ok()?;
+    let sep = (second.cx - first.cx).hypot(second.cy - first.cy);
+    let same_size = (second.r - first.r).abs() < 0.03 * first.r;
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!(
+            "companion: sector {:.0}° reach {reach:.1} px -> ({:.2},{:.2}) r {:.2} ± {:.3}, \
+             first ({:.2},{:.2}) r {:.2} ± {:.3}, separation {:.1} px",
+            (best.1 - best.0) as f64 * 360.0 / N as f64,
+            second.cx,
+            second.cy,
+            second.r,
+            second.sigma_c,
+            first.cx,
+            first.cy,
+            first.r,
+            first.sigma_c,
+            sep
+        );
+    }
+    (same_size && sep >= min_ext && sep < 2.3 * r).then_some(Companion { first, second })
 }
 
 #[cfg(test)]

@@ -440,6 +440,10 @@ pub struct Problem {
     /// Cue ball after impact (`None` when it stops at the impact).
     pub out1: Option<Vec<Sample>>,
     pub out2: Vec<Sample>,
+    /// `out2` is the object ball's rest centre (one point, with its disc fit's sigma), not
+    /// centre-line samples: it crept to a stop and left no streak (`vision::disc::Companion`).
+    /// Its path is then a line from `O`, and the point's sigma is not rescaled by its scatter.
+    pub object_rest: bool,
 }
 
 /// Path models of (cue ball, object ball); the cue ball's is `None` when it stops.
@@ -1145,9 +1149,14 @@ impl Default for FitSettings {
 /// Fits the joint model, robustly, for every combination of path models, and keeps the one with
 /// the lowest BIC. `x0` is a start in the `parabola+line` layout (ball 1 absent when `out1` is).
 pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit> {
+    let m2_richest = if pb.object_rest {
+        PathModel::Line
+    } else {
+        PathModel::ParabolaLine
+    };
     let richest = (
         pb.out1.as_ref().map(|_| PathModel::ParabolaLine),
-        PathModel::ParabolaLine,
+        m2_richest,
     );
     let full = if settings.line_only {
         (pb.out1.as_ref().map(|_| PathModel::Line), PathModel::Line)
@@ -1199,7 +1208,12 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
         let mut a: Vec<f32> = inl.iter().map(|v| v.abs()).collect();
         let s = (1.4826 * super::background::median(&mut a) as f64).max(1e-9);
         let cut = (4.0 * s).max(3.0);
-        let new: [Vec<bool>; 3] = [0, 1, 2].map(|g| res[g].iter().map(|v| v.abs() < cut).collect());
+        let new: [Vec<bool>; 3] = [0, 1, 2].map(|g| {
+            res[g]
+                .iter()
+                .map(|v| v.abs() < cut || (g == 2 && pb.object_rest))
+                .collect()
+        });
         if new == use_ {
             ev_full = Some(ev);
             break;
@@ -1208,7 +1222,7 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     }
     for (g, u) in use_.iter().enumerate() {
         let n = u.iter().filter(|k| **k).count();
-        if n < 5 && !(g == 1 && pb.out1.is_none()) {
+        if n < 5 && !(g == 1 && pb.out1.is_none()) && !(g == 2 && pb.object_rest) {
             return None;
         }
     }
@@ -1241,13 +1255,17 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     };
     let combos: Vec<(Option<PathModel>, PathModel)> = if settings.line_only {
         vec![full]
-    } else if pb.out1.is_some() {
-        let ms = [PathModel::Line, PathModel::ParabolaLine];
-        ms.iter()
-            .flat_map(|a| ms.iter().map(move |b| (Some(*a), *b)))
-            .collect()
     } else {
-        vec![(None, PathModel::Line), (None, PathModel::ParabolaLine)]
+        let ms = [PathModel::Line, PathModel::ParabolaLine];
+        let m2s = if pb.object_rest { &ms[..1] } else { &ms[..] };
+        let m1s: Vec<Option<PathModel>> = if pb.out1.is_some() {
+            ms.iter().map(|m| Some(*m)).collect()
+        } else {
+            vec![None]
+        };
+        m1s.iter()
+            .flat_map(|a| m2s.iter().map(move |b| (*a, *b)))
+            .collect()
     };
     let mut ev_full = Some(ev_full);
     let mut best: Option<(f64, Vec<f64>, Combo, Eval)> = None;
@@ -1273,7 +1291,7 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     let mut corr = [1.0; 3];
     for g in 0..3 {
         let rows = &r[bounds[g + 1]..bounds[g + 2]];
-        if rows.is_empty() {
+        if rows.is_empty() || (g == 2 && pb.object_rest) {
             continue;
         }
         let k_g = match g {
@@ -1306,6 +1324,9 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     let mut delta_profile = [None, None];
     let mut delta_lin = [None, None];
     for (ball, m) in [(0, cb.0), (1, Some(cb.1))] {
+        if ball == 1 && pb.object_rest {
+            continue;
+        }
         let parabola = match m {
             Some(PathModel::ParabolaLine) => true,
             Some(PathModel::Line) if full == richest => false,
@@ -1463,6 +1484,7 @@ mod tests {
             incoming,
             out1: Some(samples_along(&g1, 900.0, 80, spread, rng)),
             out2: samples_along(&g2, 900.0, 80, spread, rng),
+            object_rest: false,
         }
     }
 

@@ -517,6 +517,119 @@ fn read_scene(
     Ok(best)
 }
 
+/// A grazing shot whose object ball crept (see [`disc::Companion`]): no streak of its own, its
+/// path is the line from its waiting disc `O` to its rest disc `Q`.
+struct Creep {
+    /// The waiting disc.
+    o: disc::Disc,
+    /// The rest disc.
+    q: disc::Disc,
+    inc: usize,
+    b1: usize,
+    cost: f64,
+    /// Start for the joint fit, the object ball's path a line: `[O, R, α, ψs, ball 1…, θ2]`.
+    x0: Vec<f64>,
+}
+
+/// The scene read as a crept object ball ([`Creep`]) with the cue ball's two streaks among
+/// `streaks`: of the two discs, the waiting one is where the incoming line meets a ball at `2R`
+/// and the rest disc lies beyond it along the line of centres (within the throw), and the cue
+/// ball's outgoing streak leaves from `P`. The lowest-cost reading, as in [`read_scene`].
+fn read_creep(
+    sig: &Signal,
+    dsc: &disc::Disc,
+    streaks: &[Vec<Sample>],
+    colours: &[[f32; 3]],
+) -> Option<Creep> {
+    let pair = disc::companion(sig, dsc)?;
+    let lines: Vec<Option<Line>> = streaks.iter().map(|s| fit_line(s)).collect();
+    let mut best: Option<Creep> = None;
+    let mut readings: Vec<(f64, usize, (f64, f64))> = Vec::new();
+    for (od, qd) in [(&pair.first, &pair.second), (&pair.second, &pair.first)] {
+        let (o, r) = ((od.cx, od.cy), od.r);
+        for inc in 0..streaks.len() {
+            let Some(li) = lines[inc] else { continue };
+            let u = (-li.d.0, -li.d.1);
+            let Some(p) = contact_point(li.p, u, o, r, 1.15) else {
+                continue;
+            };
+            let alpha = (o.1 - p.1).atan2(o.0 - p.0);
+            let psi_s = wrap(u.1.atan2(u.0) - alpha);
+            let t2 = wrap((qd.cy - o.1).atan2(qd.cx - o.0) - alpha);
+            if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                eprintln!(
+                    "creep candidate O ({:.1},{:.1}) inc {inc}: psi {:.2}° t2 {:.2}°",
+                    o.0,
+                    o.1,
+                    psi_s.to_degrees(),
+                    t2.to_degrees()
+                );
+            }
+            // A line that misses the ball (met at its closest approach, psi = 90°) is the cue
+            // ball leaving, tangent to the object ball, read backwards.
+            if psi_s.abs() >= 89.9f64.to_radians()
+                || psi_s.abs() < CREEP_PSI_MIN_DEG.to_radians()
+                || t2.abs() > OBJECT_THROW_MAX_DEG.to_radians()
+            {
+                continue;
+            }
+            let m = if psi_s < 0.0 { -1.0 } else { 1.0 };
+            for b1 in (0..streaks.len()).filter(|&b| b != inc) {
+                let Some(l1) = lines[b1] else { continue };
+                let Some((d1, t1, l0, l1_len)) = initial_path(&streaks[b1], p, alpha, r) else {
+                    continue;
+                };
+                let same: f64 = (0..3)
+                    .map(|c| (colours[inc][c] * colours[b1][c]) as f64)
+                    .sum();
+                // The cue ball's rolling line passes near P (it turns by little at grazing).
+                let miss1 = (l1.d.0 * (p.1 - l1.p.1) - l1.d.1 * (p.0 - l1.p.0)).abs();
+                let d1m = m * t1;
+                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                    eprintln!(
+                        "  b1 {b1}: colour {same:.3} miss {:.2} R, turn {:.1}°",
+                        miss1 / r,
+                        d1m.to_degrees()
+                    );
+                }
+                if same < CUE_COLOUR_MIN
+                    || miss1 > 1.5 * r
+                    || !(-25f64.to_radians()..=150f64.to_radians()).contains(&d1m)
+                {
+                    continue;
+                }
+                let cost = t2.abs() + if d1m < m * t2 { 0.5 } else { 0.0 };
+                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                    eprintln!("  b1 {b1}: cost {cost:.3}");
+                }
+                readings.push((cost, inc, (od.cx, od.cy)));
+                if best.as_ref().is_none_or(|b| cost < b.cost) {
+                    best = Some(Creep {
+                        o: od.clone(),
+                        q: qd.clone(),
+                        inc,
+                        b1,
+                        cost,
+                        x0: vec![o.0, o.1, r, alpha, psi_s, d1, t1, l0, l1_len, t2],
+                    });
+                }
+            }
+        }
+    }
+    // At grazing incidence the cue ball's two streaks nearly share a line and either could be
+    // the incoming one: the rest disc's direction must tell them apart, as in [`read_scene`].
+    let b = best.as_ref()?;
+    let rival = readings.iter().any(|(cost, inc, o)| {
+        *cost < b.cost + 3f64.to_radians() && (*inc != b.inc || *o != (b.o.cx, b.o.cy))
+    });
+    (!rival).then_some(best?)
+}
+
+/// Least impact angle of a crept object ball reading: the object ball leaves at `v cos psi` and
+/// stops within two radii only at glancing incidence (on the synthetic sets, psi ≥ 75°); a
+/// smaller psi with two discs is a cue ball resting near the object ball (a stun shot).
+const CREEP_PSI_MIN_DEG: f64 = 45.0;
+
 /// Unit colour direction (ball minus cloth) of the disc's inner half, from the coarse signal.
 fn disc_colour(sig: &Signal, o: (f64, f64), r: f64) -> [f32; 3] {
     let f = sig.f as f64;
@@ -1262,7 +1375,7 @@ impl DiscTracks {
 /// `used_narrow` when a streak read in the scene was kept by it.
 fn read_body(
     sig: &Signal,
-    dsc: disc::Disc,
+    mut dsc: disc::Disc,
     opts: &AnalysisOptions,
     second_disc: bool,
     tracks: &mut DiscTracks,
@@ -1271,7 +1384,7 @@ fn read_body(
 ) -> Analysis {
     let mut out = Analysis::declined(Status::Declined, "");
     out.ball_radius_px = Some(dsc.r);
-    let (o, r) = ((dsc.cx, dsc.cy), dsc.r);
+    let (mut o, mut r) = ((dsc.cx, dsc.cy), dsc.r);
     out.disc = Some(dsc.clone());
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let mut sel = select_streaks(tracks.tracked.clone(), o, r, allow_narrow);
@@ -1283,14 +1396,14 @@ fn read_body(
         }
     }
     let Selected {
-        raw,
-        kept,
-        colours,
+        mut raw,
+        mut kept,
+        mut colours,
         narrow,
     } = sel;
     *used_narrow = narrow.iter().any(|n| *n);
     out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
-    let cue_stopped = match kept.len() {
+    let mut cue_stopped = match kept.len() {
         0 => {
             out.reason = "no streak found: no collision recorded".into();
             return out;
@@ -1311,12 +1424,47 @@ fn read_body(
     if std::env::var_os("STREAKFIT_DEBUG").is_some() {
         eprintln!("likeness {likeness:?} colours {colours:?} disc {disc_u:?}");
     }
+    // The object ball's rest disc when it crept (grazing shots): its one centre-line "sample".
+    let mut creep: Option<disc::Disc> = None;
     let reading = match read_scene(&kept, &likeness, &colours, o, r, cue_stopped) {
         Ok(rd) => rd,
-        Err(e) => {
-            out.reason = e;
-            return out;
-        }
+        Err(e) => match read_creep(sig, &dsc, &kept, &colours) {
+            Some(c) => {
+                if debug {
+                    eprintln!(
+                        "creep: O ({:.2},{:.2}) Q ({:.2},{:.2}) inc {} b1 {}",
+                        c.o.cx, c.o.cy, c.q.cx, c.q.cy, c.inc, c.b1
+                    );
+                }
+                dsc = c.o;
+                (o, r) = ((dsc.cx, dsc.cy), dsc.r);
+                out.ball_radius_px = Some(r);
+                out.disc = Some(dsc.clone());
+                cue_stopped = false;
+                let q = vec![Sample {
+                    x: c.q.cx,
+                    y: c.q.cy,
+                    sigma: c.q.sigma_c.max(0.02),
+                    amp: c.q.contrast,
+                }];
+                kept.push(q.clone());
+                raw.push(q.clone());
+                colours.push(disc_colour(sig, o, r));
+                out.streaks.push((Role::Unused, q));
+                creep = Some(c.q);
+                Reading {
+                    inc: c.inc,
+                    b1: Some(c.b1),
+                    b2: kept.len() - 1,
+                    cost: c.cost,
+                    x0: c.x0,
+                }
+            }
+            None => {
+                out.reason = e;
+                return out;
+            }
+        },
     };
     // Only two streaks: the cue ball's own path after the impact is missing. Either it stopped
     // (a ball rests at P) or its path is hidden along the other streaks; without light at P
@@ -1366,6 +1514,12 @@ fn read_body(
         // Margins: the antialiased edge (1.5 px) and, for bands, the sagitta of the sliding arc
         // between the start and the first clean sample (≤ 0.1 R).
         ex.discs.push((o, r + 1.5));
+        if let Some(q) = &creep {
+            if Some(a) == Some(reading.b2) {
+                continue;
+            }
+            ex.discs.push(((q.cx, q.cy), r + 1.5));
+        }
         for &b in roles.iter().filter(|&&b| b != a) {
             let mut pts = vec![start_of(b)];
             pts.extend(kept[b].iter().map(|q| (q.x, q.y)));
@@ -1448,6 +1602,7 @@ fn read_body(
         incoming: measured[reading.inc].clone(),
         out1: reading.b1.map(|b| measured[b].clone()),
         out2: measured[reading.b2].clone(),
+        object_rest: creep.is_some(),
     };
     if let Some(path) = std::env::var_os("STREAKFIT_DUMP") {
         let mut txt = String::new();
@@ -1545,6 +1700,19 @@ fn read_body(
     out.psi_deg = Some(deg(psi_s.abs()));
     let psi_sd = calibrated_sd(fit.sd(4));
     out.psi_err_deg = Some(deg(psi_sd));
+    // Beyond 90° the incoming line passes the object ball without touching it; within two
+    // sigma of 90° the photo cannot tell an impact from a miss.
+    if psi_s.abs() >= std::f64::consts::FRAC_PI_2 - 2.0 * psi_sd {
+        out.status = Status::Declined;
+        out.reason = format!(
+            "impact not resolved: the fitted incoming line passes the object ball or within two \
+             sigma of missing it (psi = {:.1}° ± {:.1}°)",
+            deg(psi_s.abs()),
+            deg(psi_sd)
+        );
+        out.fit = Some(fit);
+        return out;
+    }
     // psi carries every other angle's frame: a shot whose impact geometry is this uncertain
     // measures nothing useful (on the synthetic sets such rows were also the wrong readings).
     if psi_sd > PSI_RESOLVED_DEG.to_radians() {
@@ -1586,6 +1754,13 @@ fn read_body(
     // where the streaks overlap near the impact): it is reported as undefined, with the reason.
     let unresolved = 10f64.to_radians();
     let mut notes: Vec<String> = Vec::new();
+    if let Some(q) = &creep {
+        notes.push(format!(
+            "the object ball crept {:.2} R and stopped: its path is the line from its waiting to \
+             its rest disc (delta2 = theta2)",
+            (q.cx - o.0).hypot(q.cy - o.1) / r
+        ));
+    }
     let mut delta1_from_arc = false;
     let mut arc_rival = false;
     let mut arc_rest: Option<f64> = None;
