@@ -466,10 +466,12 @@ pub struct Companion {
 /// Least protrusion of the light past the disc's rim (in radii, and at least 4 px) for a ray
 /// to count as reaching into a second disc.
 const COMPANION_MIN_PROTRUSION_R: f64 = 0.06;
-/// Farthest edge of a second disc (radii from the first centre): its centre lies within two radii
-/// (a ball that crept further leaves a streak of its own, read as a path). Light reaching past
-/// it along a ray is a streak.
-const COMPANION_MAX_EXTENT_R: f64 = 3.3;
+/// Farthest edge of a second disc (radii from the first centre): its centre lies within
+/// [`COMPANION_MAX_SEPARATION_R`] (a ball that went further leaves a streak long enough to be
+/// read as a path). Light reaching past it along a ray is a streak.
+const COMPANION_MAX_EXTENT_R: f64 = COMPANION_MAX_SEPARATION_R + 1.1;
+/// Largest distance between the two discs' centres, in radii.
+const COMPANION_MAX_SEPARATION_R: f64 = 3.5;
 /// Level (of the disc's contrast) above which a pixel past the rim is lit: a rest disc is exposed
 /// for at least about a fifth of the frame, the waiting one for about half.
 const COMPANION_LIT_LEVEL: f64 = 0.2;
@@ -602,7 +604,8 @@ pub fn companion(sig: &Signal, d: &Disc) -> Option<Companion> {
             sep
         );
     }
-    (same_size && sep >= min_ext && sep < 2.3 * r).then_some(Companion { first, second })
+    (same_size && sep >= min_ext && sep < COMPANION_MAX_SEPARATION_R * r)
+        .then_some(Companion { first, second })
 }
 
 #[cfg(test)]
