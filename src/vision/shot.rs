@@ -542,6 +542,16 @@ fn read_creep(
     colours: &[[f32; 3]],
 ) -> Option<Creep> {
     let pair = disc::companion(sig, dsc)?;
+    // Both discs are the same ball: the same colour (a cue ball resting next to a coloured
+    // object ball is not).
+    let (c1, c2) = (
+        disc_colour(sig, (pair.first.cx, pair.first.cy), pair.first.r),
+        disc_colour(sig, (pair.second.cx, pair.second.cy), pair.second.r),
+    );
+    let like: f64 = (0..3).map(|c| (c1[c] * c2[c]) as f64).sum();
+    if like < CUE_COLOUR_MIN {
+        return None;
+    }
     let lines: Vec<Option<Line>> = streaks.iter().map(|s| fit_line(s)).collect();
     let mut best: Option<Creep> = None;
     let mut readings: Vec<(f64, usize, (f64, f64))> = Vec::new();
@@ -1426,45 +1436,56 @@ fn read_body(
     }
     // The object ball's rest disc when it crept (grazing shots): its one centre-line "sample".
     let mut creep: Option<disc::Disc> = None;
-    let reading = match read_scene(&kept, &likeness, &colours, o, r, cue_stopped) {
-        Ok(rd) => rd,
-        Err(e) => match read_creep(sig, &dsc, &kept, &colours) {
-            Some(c) => {
-                if debug {
-                    eprintln!(
-                        "creep: O ({:.2},{:.2}) Q ({:.2},{:.2}) inc {} b1 {}",
-                        c.o.cx, c.o.cy, c.q.cx, c.q.cy, c.inc, c.b1
-                    );
-                }
-                dsc = c.o;
-                (o, r) = ((dsc.cx, dsc.cy), dsc.r);
-                out.ball_radius_px = Some(r);
-                out.disc = Some(dsc.clone());
-                cue_stopped = false;
-                let q = vec![Sample {
-                    x: c.q.cx,
-                    y: c.q.cy,
-                    sigma: c.q.sigma_c.max(0.02),
-                    amp: c.q.contrast,
-                }];
-                kept.push(q.clone());
-                raw.push(q.clone());
-                colours.push(disc_colour(sig, o, r));
-                out.streaks.push((Role::Unused, q));
-                creep = Some(c.q);
-                Reading {
-                    inc: c.inc,
-                    b1: Some(c.b1),
-                    b2: kept.len() - 1,
-                    cost: c.cost,
-                    x0: c.x0,
-                }
+    // A crept object ball's short sweep between its discs can pass for a streak and give a
+    // reading with the roles swapped (the sweep as the cue ball's path, the cue ball's as the
+    // object ball's): where two discs of the ball are found, the reading that costs less holds.
+    let scene = read_scene(&kept, &likeness, &colours, o, r, cue_stopped);
+    let creep_reading = match &scene {
+        Ok(rd) if rd.b1.is_none() => None,
+        _ => read_creep(sig, &dsc, &kept, &colours),
+    };
+    let (scene, creep_reading) = match (scene, creep_reading) {
+        (Ok(rd), Some(c)) if c.cost >= rd.cost => (Ok(rd), None),
+        (Ok(_), Some(c)) => (Err(String::new()), Some(c)),
+        other => other,
+    };
+    let reading = match (scene, creep_reading) {
+        (Ok(rd), _) => rd,
+        (Err(_), Some(c)) => {
+            if debug {
+                eprintln!(
+                    "creep: O ({:.2},{:.2}) Q ({:.2},{:.2}) inc {} b1 {}",
+                    c.o.cx, c.o.cy, c.q.cx, c.q.cy, c.inc, c.b1
+                );
             }
-            None => {
-                out.reason = e;
-                return out;
+            dsc = c.o;
+            (o, r) = ((dsc.cx, dsc.cy), dsc.r);
+            out.ball_radius_px = Some(r);
+            out.disc = Some(dsc.clone());
+            cue_stopped = false;
+            let q = vec![Sample {
+                x: c.q.cx,
+                y: c.q.cy,
+                sigma: c.q.sigma_c.max(0.02),
+                amp: c.q.contrast,
+            }];
+            kept.push(q.clone());
+            raw.push(q.clone());
+            colours.push(disc_colour(sig, o, r));
+            out.streaks.push((Role::Unused, q));
+            creep = Some(c.q);
+            Reading {
+                inc: c.inc,
+                b1: Some(c.b1),
+                b2: kept.len() - 1,
+                cost: c.cost,
+                x0: c.x0,
             }
-        },
+        }
+        (Err(e), None) => {
+            out.reason = e;
+            return out;
+        }
     };
     // Only two streaks: the cue ball's own path after the impact is missing. Either it stopped
     // (a ball rests at P) or its path is hidden along the other streaks; without light at P
