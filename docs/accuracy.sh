@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Extraction accuracy against ground truth, as quoted in the README: four synthetic sets of 24
-# photos (2400×1600, seed 101) and 36 clean mixed-spin shots with a plate (seed 8), extracted
-# with the default settings, compared with truth.csv.
+# photos (2400×1600, seed 101), 36 clean mixed-spin shots with a plate (seed 8) and 24 clean
+# grazing shots (psi 72–86°, seed 77) with and without a plate, extracted with the default
+# settings, compared with truth.csv.
 # Usage: docs/accuracy.sh [WORKDIR]   (needs a release build: cargo build --release)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,8 +13,10 @@ work="${1:-$(mktemp -d)}"
 "$bin" synth --out "$work/realistic" --tier realistic --shots 24 --seed 101 >/dev/null
 "$bin" synth --out "$work/hard" --tier hard --shots 24 --seed 101 >/dev/null
 "$bin" synth --out "$work/mixed" --tier clean --shots 36 --seed 8 --spin-modes mixed --background >/dev/null
+"$bin" synth --out "$work/grazing_plate" --tier clean --shots 24 --seed 77 --psi 72:86 --background >/dev/null
+"$bin" synth --out "$work/grazing" --tier clean --shots 24 --seed 77 --psi 72:86 >/dev/null
 args=()
-for set in clean_plate clean realistic hard mixed; do
+for set in clean_plate clean realistic hard mixed grazing_plate grazing; do
   n=$(find "$work/$set" -name 'shot_*' | wc -l)
   start=$(date +%s.%N)
   "$bin" extract "$work/$set" --out "$work/$set.csv" --jobs 2 || true   # exit 1 when a row is `error`
