@@ -101,6 +101,14 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
             Rgb([255, 230, 0]),
         );
     }
+    if let Some(d) = &a.rest_disc {
+        draw_hollow_circle_mut(
+            &mut out,
+            (d.cx.round() as i32, d.cy.round() as i32),
+            d.r.round() as i32,
+            Rgb([255, 60, 255]),
+        );
+    }
     for (role, samples) in &a.streaks {
         let (color, inl) = match role {
             Role::Incoming => (Rgb([255, 255, 255]), a.fit.as_ref().map(|f| &f.inliers[0])),

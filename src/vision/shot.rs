@@ -161,6 +161,8 @@ pub struct Analysis {
     pub ball_radius_px: Option<f64>,
     pub impact: Option<(f64, f64)>,
     pub disc: Option<Disc>,
+    /// The object ball's rest disc when it crept (grazing shots, [`disc::Companion`]).
+    pub rest_disc: Option<Disc>,
     pub streaks: Vec<(Role, Vec<Sample>)>,
     pub fit: Option<JointFit>,
     /// +1 or -1: the mirror applied so that psi ≥ 0.
@@ -189,6 +191,7 @@ impl Analysis {
             ball_radius_px: None,
             impact: None,
             disc: None,
+            rest_disc: None,
             streaks: Vec::new(),
             fit: None,
             mirror: 1.0,
@@ -1474,6 +1477,7 @@ fn read_body(
             raw.push(q.clone());
             colours.push(disc_colour(sig, o, r));
             out.streaks.push((Role::Unused, q));
+            out.rest_disc = Some(c.q.clone());
             creep = Some(c.q);
             Reading {
                 inc: c.inc,
