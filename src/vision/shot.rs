@@ -1067,10 +1067,26 @@ fn read_candidates(
             ));
             continue;
         }
-        let a = within_scale(
-            deflected(read_from_disc(sig, dsc, opts, false)),
+        let mut a = within_scale(
+            deflected(read_from_disc(sig, dsc.clone(), opts, false)),
             scene_radius_px,
         );
+        // The brighter of a crept object ball's two discs may be its rest disc, around which
+        // the streaks do not read: read from the other (its waiting disc) before moving on.
+        if a.status != Status::Ok
+            && let Some(c) = disc::companion(sig, &dsc)
+        {
+            let b = within_scale(
+                deflected(read_from_disc(sig, c.second, opts, false)),
+                scene_radius_px,
+            );
+            if debug {
+                eprintln!("companion disc reading: {:?} {}", b.status, b.reason);
+            }
+            if b.status == Status::Ok && b.rest_disc.is_some() {
+                a = b;
+            }
+        }
         if debug {
             eprintln!("disc reading: {:?} {}", a.status, a.reason);
         }
