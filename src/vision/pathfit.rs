@@ -1147,7 +1147,8 @@ impl Default for FitSettings {
 }
 
 /// Fits the joint model, robustly, for every combination of path models, and keeps the one with
-/// the lowest BIC. `x0` is a start in the `parabola+line` layout (ball 1 absent when `out1` is).
+/// the lowest BIC. `x0` is a start in the richest layout: `parabola+line` for each ball (ball 1
+/// absent when `out1` is), the object ball a `line` when `object_rest`.
 pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit> {
     let m2_richest = if pb.object_rest {
         PathModel::Line
@@ -1707,6 +1708,56 @@ mod tests {
             }
             assert!((f.o().0 - xt[0]).abs() < 0.05 && (f.r() - xt[2]).abs() < 0.05);
             assert!(f.sd(t1).is_finite() && f.sd(t1) > 0.0);
+        }
+    }
+
+    /// An object ball that crept to rest: its "streak" is one point, the rest disc's centre `Q`,
+    /// with the disc fit's sigma. Its path is a line from `O` through `Q`: theta2 is the
+    /// direction of `Q`, with a sigma of about that of `Q` across the line over `|Q − O|` (with
+    /// `O`'s and alpha's own added; measured 1.05–1.3 of it), the point is never an outlier and
+    /// its group is not rescaled, and psi is that of the fit with a full object streak.
+    #[test]
+    fn a_rest_point_sets_the_object_balls_line() {
+        let mut rng = Rng(0xfeed_beef_0007);
+        for _ in 0..3 {
+            let mut xt = truth(&mut rng);
+            xt[11] = 0.5 * xt[2];
+            xt[12] = 0.5 * xt[2];
+            let mut pb = problem(&xt, 0.02, &mut rng);
+            pb.out1.as_mut().unwrap().truncate(78);
+            // Disc priors as a disc fit gives them.
+            (pb.o_meas, pb.sigma_o) = ((xt[0], xt[1]), 0.02);
+            (pb.r_meas, pb.sigma_r) = (xt[2], 0.01);
+            // The rest centre 1.5 R from O, along alpha + theta2, read 0.3 sigma across the line.
+            let (d, sq) = (1.5 * xt[2], 0.05);
+            let u = unit(xt[3] + xt[10]);
+            pb.out2 = vec![Sample {
+                x: xt[0] + d * u.0 - 0.3 * sq * u.1,
+                y: xt[1] + d * u.1 + 0.3 * sq * u.0,
+                sigma: sq,
+                amp: 1.0,
+            }];
+            pb.object_rest = true;
+            let mut x0: Vec<f64> = xt[..9].to_vec();
+            x0.push(xt[10] + 0.02);
+            let f = fit(&pb, &x0, &FitSettings::default()).expect("fit");
+            assert_eq!(f.m2, PathModel::Line);
+            let (d2, t2) = f.angle_indices(2).unwrap();
+            assert_eq!(d2, t2);
+            let sd = f.sd(t2);
+            let ratio = sd / (sq / d);
+            assert!((1.0..1.6).contains(&ratio), "sd {sd} against {}", sq / d);
+            let want = xt[10] + 0.3 * sq / d;
+            assert!(
+                (f.params[t2] - want).abs() < sd,
+                "theta2 {:.5}° against {:.5}° ± {:.5}°",
+                f.params[t2].to_degrees(),
+                want.to_degrees(),
+                sd.to_degrees()
+            );
+            assert!((f.psi_s() - xt[4]).abs() < 0.01f64.to_radians());
+            assert!((f.s2[2] - 1.0).abs() < 1e-12, "{:?}", f.s2);
+            assert!(f.inliers[2][0]);
         }
     }
 

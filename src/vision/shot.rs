@@ -544,6 +544,7 @@ fn read_creep(
     streaks: &[Vec<Sample>],
     colours: &[[f32; 3]],
 ) -> Option<Creep> {
+    let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let pair = disc::companion(sig, dsc)?;
     // Both discs are the same ball: the same colour (a cue ball resting next to a coloured
     // object ball is not).
@@ -569,7 +570,7 @@ fn read_creep(
             let alpha = (o.1 - p.1).atan2(o.0 - p.0);
             let psi_s = wrap(u.1.atan2(u.0) - alpha);
             let t2 = wrap((qd.cy - o.1).atan2(qd.cx - o.0) - alpha);
-            if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+            if debug {
                 eprintln!(
                     "creep candidate O ({:.1},{:.1}) inc {inc}: psi {:.2}° t2 {:.2}°",
                     o.0,
@@ -598,7 +599,7 @@ fn read_creep(
                 // The cue ball's rolling line passes near P (it turns by little at grazing).
                 let miss1 = (l1.d.0 * (p.1 - l1.p.1) - l1.d.1 * (p.0 - l1.p.0)).abs();
                 let d1m = m * t1;
-                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                if debug {
                     eprintln!(
                         "  b1 {b1}: colour {same:.3} miss {:.2} R, turn {:.1}°",
                         miss1 / r,
@@ -612,7 +613,7 @@ fn read_creep(
                     continue;
                 }
                 let cost = t2.abs() + if d1m < m * t2 { 0.5 } else { 0.0 };
-                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                if debug {
                     eprintln!("  b1 {b1}: cost {cost:.3}");
                 }
                 readings.push((cost, inc, (od.cx, od.cy)));
@@ -1464,14 +1465,10 @@ fn read_body(
         Ok(rd) if rd.b1.is_none() => None,
         _ => read_creep(sig, &dsc, &kept, &colours),
     };
-    let (scene, creep_reading) = match (scene, creep_reading) {
-        (Ok(rd), Some(c)) if c.cost >= rd.cost => (Ok(rd), None),
-        (Ok(_), Some(c)) => (Err(String::new()), Some(c)),
-        other => other,
-    };
     let reading = match (scene, creep_reading) {
-        (Ok(rd), _) => rd,
-        (Err(_), Some(c)) => {
+        (Ok(rd), None) => rd,
+        (Ok(rd), Some(c)) if c.cost >= rd.cost => rd,
+        (_, Some(c)) => {
             if debug {
                 eprintln!(
                     "creep: O ({:.2},{:.2}) Q ({:.2},{:.2}) inc {} b1 {}",
@@ -1557,7 +1554,7 @@ fn read_body(
         // between the start and the first clean sample (≤ 0.1 R).
         ex.discs.push((o, r + 1.5));
         if let Some(q) = &creep {
-            if Some(a) == Some(reading.b2) {
+            if a == reading.b2 {
                 continue;
             }
             ex.discs.push(((q.cx, q.cy), r + 1.5));
