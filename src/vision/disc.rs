@@ -15,6 +15,10 @@
 //! not in `σ_R`: added to the joint fit's prior as 0.02 px (tried), it let a path model that
 //! misfits (a short straight cue path forced through P) pull `R` by 13 sigma, and on 17
 //! synthetic sets it read one more row wrong and every angle slightly worse.
+//!
+//! A ball that crept (grazing shots) leaves a second disc overlapping or near the first
+//! ([`companion`]): each is then refined from its half facing away from the other
+//! ([`refine_excluding`]), whose rim is clear of the band the ball swept between them.
 
 use super::background::{Signal, box_blur, median};
 use nalgebra::{Matrix3, Vector3};
@@ -487,10 +491,10 @@ const COMPANION_LIT_LEVEL: f64 = 0.2;
 
 /// A second disc of the ball of `d` overlapping or touching it (see [`Companion`]), or `None`.
 /// Rays from the centre measure how far the light reaches past the rim; the rays that reach
-/// past it by [`COMPANION_MIN_PROTRUSION_R`] and end before [`COMPANION_MAX_EXTENT_R`] (a streak
+/// past it by `COMPANION_MIN_PROTRUSION_R` and end before `COMPANION_MAX_EXTENT_R` (a streak
 /// continues) must form one sector at least 30° wide, whose mean direction and greatest reach
 /// place the second disc's centre. Both discs are then refined from their outer halves
-/// ([`refine_excluding`]), and the second must have the first's radius within [`COMPANION_RADIUS_TOL`].
+/// ([`refine_excluding`]), and the second must have the first's radius within `COMPANION_RADIUS_TOL`.
 pub fn companion(sig: &Signal, d: &Disc) -> Option<Companion> {
     let (o, r) = ((d.cx, d.cy), d.r);
     const N: usize = 180;

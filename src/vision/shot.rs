@@ -10,7 +10,11 @@
 //! `|theta2|` wins; if the runner-up is about as good, the photo is declined (cannot tell which
 //! ball is which). Two streaks only: the cue ball stopped at the impact if a stationary disc
 //! sits at `P` (then `delta1`, `theta1` are undefined), otherwise its streak is hidden and the
-//! photo is declined.
+//! photo is declined. At grazing incidence the object ball may creep a few radii and stop with
+//! no streak: where a second disc of it is found ([`disc::companion`]) the scene is also read
+//! as such (`read_creep`; the waiting disc is the one the incoming line meets at `2R`), its
+//! path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
+//! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined.
 
 use super::arc;
 use super::background::{self, Cloth, ClothModel, Signal};
