@@ -1,6 +1,6 @@
 //! Scene reading and the whole analysis of one photograph.
 //!
-//! Which streak is which: every assignment of the (up to three) streaks to *incoming*, *cue ball
+//! Which streak is which: every assignment of the (up to four) streaks to *incoming*, *cue ball
 //! out* and *object ball out* is tried. For each, the incoming centre-line (RANSAC, then least
 //! squares) gives the impact point `P` (first point of that line at `2R` from `O`), hence `x̂`.
 //! An assignment is physical when the incoming ball moves towards the object ball
@@ -1123,7 +1123,7 @@ fn read_candidates(
 /// Fewest centre-line samples (steps of `R/10`) of a streak found by line integrals.
 const FAINT_MIN_SAMPLES: usize = 10;
 
-/// Up to three distinct streaks, longest first.
+/// Up to four distinct streaks, longest first.
 struct Selected {
     /// The tracked centre-lines.
     raw: Vec<Vec<Sample>>,
@@ -1297,10 +1297,12 @@ fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bo
             );
         }
     }
-    // Up to three streaks, the longest clean first (a stable sort: ties keep the tracking order).
+    // Up to four streaks, the longest clean first (a stable sort: ties keep the tracking order).
     let mut order: Vec<usize> = (0..tracks.len()).filter(|&a| clean[a].len() >= 5).collect();
     order.sort_by_key(|&a| std::cmp::Reverse(clean[a].len()));
-    order.truncate(3);
+    // Four: a stray ball's long streak crossing the scene must not push out one of the shot's
+    // (the scene reading leaves the one that fits no role unused).
+    order.truncate(4);
     let raw: Vec<Vec<Sample>> = order.iter().map(|&a| tracks[a].clone()).collect();
     let colours: Vec<[f32; 3]> = order.iter().map(|&a| track_u[a]).collect();
     let kept: Vec<Vec<Sample>> = order.iter().map(|&a| clean[a].clone()).collect();
