@@ -20,7 +20,7 @@
 //! ([`companion`]): each is then refined from its half facing away from the other
 //! ([`refine_excluding`]), whose rim is clear of the band the ball swept between them.
 
-use super::background::{Signal, box_blur, median};
+use super::background::{Signal, box_blur, median, median_of};
 use nalgebra::{Matrix3, Vector3};
 
 #[derive(Debug, Clone)]
@@ -509,7 +509,7 @@ pub fn companion(sig: &Signal, d: &Disc) -> Option<Companion> {
     if ring.len() < 64 {
         return None;
     }
-    let cloth = median(&mut ring.clone()) as f64;
+    let cloth = median_of(&ring) as f64;
     for v in ring.iter_mut() {
         *v = (*v as f64 - cloth).abs() as f32;
     }

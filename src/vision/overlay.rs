@@ -93,21 +93,15 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
     let lw = (side / 500.0).max(1.0);
     let dot = (side / 400.0).max(1.0).round() as i32;
     let r = a.ball_radius_px.unwrap_or(side / 40.0);
-    if let Some(d) = &a.disc {
-        draw_hollow_circle_mut(
-            &mut out,
-            (d.cx.round() as i32, d.cy.round() as i32),
-            d.r.round() as i32,
-            Rgb([255, 230, 0]),
-        );
-    }
-    if let Some(d) = &a.rest_disc {
-        draw_hollow_circle_mut(
-            &mut out,
-            (d.cx.round() as i32, d.cy.round() as i32),
-            d.r.round() as i32,
-            Rgb([255, 60, 255]),
-        );
+    // The object ball's waiting disc, and its rest disc when it crept.
+    for (d, c) in [
+        (&a.disc, Rgb([255, 230, 0])),
+        (&a.rest_disc, Rgb([255, 60, 255])),
+    ] {
+        if let Some(d) = d {
+            let centre = (d.cx.round() as i32, d.cy.round() as i32);
+            draw_hollow_circle_mut(&mut out, centre, d.r.round() as i32, c);
+        }
     }
     for (role, samples) in &a.streaks {
         let (color, inl) = match role {

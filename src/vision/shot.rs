@@ -278,30 +278,24 @@ pub fn fit_line(samples: &[Sample]) -> Option<Line> {
     Some(Line { p: (mx, my), d })
 }
 
-/// First point of the line `p + t u` (moving along `u`) at distance `2r` from `o`; when the line
-/// passes farther than `2r` (a grazing shot measured with noise) its closest approach, provided
-/// that is within `tol · 2r`.
-fn contact_point(
-    p: (f64, f64),
-    u: (f64, f64),
-    o: (f64, f64),
-    r: f64,
-    tol: f64,
-) -> Option<(f64, f64)> {
-    let (wx, wy) = (p.0 - o.0, p.1 - o.1);
+/// The impact read from the incoming streak's centre-line `li` (its samples run from the disc
+/// outward, so the ball moves along `-li.d`): `P`, the first point of the line at `2R` from `O`,
+/// the direction `alpha` of the line of centres and the signed impact angle `psi_s`. `None`
+/// when the line passes farther than `2R` from `O`, or meets it at `|psi| ≥ 89.9°`, which is
+/// as good as a miss.
+fn impact_from_incoming(li: &Line, o: (f64, f64), r: f64) -> Option<((f64, f64), f64, f64)> {
+    let u = (-li.d.0, -li.d.1);
+    let (wx, wy) = (li.p.0 - o.0, li.p.1 - o.1);
     let b = wx * u.0 + wy * u.1;
-    let c = wx * wx + wy * wy - 4.0 * r * r;
-    let disc = b * b - c;
-    let t = if disc >= 0.0 {
-        -b - disc.sqrt()
-    } else {
-        let miss = (c - b * b + 4.0 * r * r).max(0.0).sqrt();
-        if miss > tol * 2.0 * r {
-            return None;
-        }
-        -b
-    };
-    Some((p.0 + t * u.0, p.1 + t * u.1))
+    let disc = b * b - (wx * wx + wy * wy - 4.0 * r * r);
+    if disc < 0.0 {
+        return None;
+    }
+    let t = -b - disc.sqrt();
+    let p = (li.p.0 + t * u.0, li.p.1 + t * u.1);
+    let alpha = (o.1 - p.1).atan2(o.0 - p.0);
+    let psi_s = wrap(u.1.atan2(u.0) - alpha);
+    (psi_s.abs() < 89.9f64.to_radians()).then_some((p, alpha, psi_s))
 }
 
 /// A candidate reading of the scene.
@@ -418,17 +412,10 @@ fn read_scene(
     let lines: Vec<Option<Line>> = streaks.iter().map(|s| fit_line(s)).collect();
     let mut readings = Vec::new();
     for inc in 0..k {
-        let Some(li) = lines[inc] else { continue };
-        // Sample order runs from the disc outward: motion is the reverse.
-        let u = (-li.d.0, -li.d.1);
-        let Some(p) = contact_point(li.p, u, o, r, 1.15) else {
+        let Some((p, alpha, psi_s)) = lines[inc].and_then(|li| impact_from_incoming(&li, o, r))
+        else {
             continue;
         };
-        let alpha = (o.1 - p.1).atan2(o.0 - p.0);
-        let psi_s = wrap(u.1.atan2(u.0) - alpha);
-        if psi_s.abs() >= 89.9f64.to_radians() {
-            continue;
-        }
         let m = if psi_s < 0.0 { -1.0 } else { 1.0 };
         for b2 in 0..k {
             if b2 == inc {
@@ -538,18 +525,18 @@ struct Creep {
     x0: Vec<f64>,
 }
 
-/// The scene read as a crept object ball ([`Creep`]) with the cue ball's two streaks among
-/// `streaks`: of the two discs, the waiting one is where the incoming line meets a ball at `2R`
-/// and the rest disc lies beyond it along the line of centres (within the throw), and the cue
-/// ball's outgoing streak leaves from `P`. The lowest-cost reading, as in [`read_scene`].
+/// The scene read as a crept object ball ([`Creep`]) from its two discs `pair` and the cue
+/// ball's two streaks among `streaks`: the waiting disc is where the incoming line meets a ball
+/// at `2R` and the rest disc lies beyond it along the line of centres (within the throw), and
+/// the cue ball's outgoing streak leaves from `P`. The lowest-cost reading, as in
+/// [`read_scene`].
 fn read_creep(
     sig: &Signal,
-    dsc: &disc::Disc,
+    pair: &disc::Companion,
     streaks: &[Vec<Sample>],
     colours: &[[f32; 3]],
 ) -> Option<Creep> {
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
-    let pair = disc::companion(sig, dsc)?;
     // Both discs are the same ball: the same colour (a cue ball resting next to a coloured
     // object ball is not).
     let (c1, c2) = (
@@ -566,13 +553,10 @@ fn read_creep(
     for (od, qd) in [(&pair.first, &pair.second), (&pair.second, &pair.first)] {
         let (o, r) = ((od.cx, od.cy), od.r);
         for inc in 0..streaks.len() {
-            let Some(li) = lines[inc] else { continue };
-            let u = (-li.d.0, -li.d.1);
-            let Some(p) = contact_point(li.p, u, o, r, 1.15) else {
+            let Some((p, alpha, psi_s)) = lines[inc].and_then(|li| impact_from_incoming(&li, o, r))
+            else {
                 continue;
             };
-            let alpha = (o.1 - p.1).atan2(o.0 - p.0);
-            let psi_s = wrap(u.1.atan2(u.0) - alpha);
             let t2 = wrap((qd.cy - o.1).atan2(qd.cx - o.0) - alpha);
             if debug {
                 eprintln!(
@@ -583,10 +567,9 @@ fn read_creep(
                     t2.to_degrees()
                 );
             }
-            // A line that misses the ball (met at its closest approach, psi = 90°) is the cue
-            // ball leaving, tangent to the object ball, read backwards.
-            if psi_s.abs() >= 89.9f64.to_radians()
-                || psi_s.abs() < CREEP_PSI_MIN_DEG.to_radians()
+            // (A line that misses the ball is the cue ball leaving, tangent to the object
+            // ball, read backwards.)
+            if psi_s.abs() < CREEP_PSI_MIN_DEG.to_radians()
                 || t2.abs() > OBJECT_THROW_MAX_DEG.to_radians()
             {
                 continue;
@@ -1372,6 +1355,8 @@ struct DiscTracks {
     ko: KeepOut,
     tracked: Vec<Tracked>,
     faint: Option<Vec<Tracked>>,
+    /// A second disc of the ball ([`disc::companion`]), searched for once.
+    companion: Option<Option<disc::Companion>>,
 }
 
 impl DiscTracks {
@@ -1392,7 +1377,15 @@ impl DiscTracks {
             ko,
             tracked,
             faint: None,
+            companion: None,
         }
+    }
+
+    /// The disc's companion, searched for at the first call.
+    fn companion(&mut self, sig: &Signal, dsc: &disc::Disc) -> Option<&disc::Companion> {
+        self.companion
+            .get_or_insert_with(|| disc::companion(sig, dsc))
+            .as_ref()
     }
 
     /// The ring's tracks followed by the faint ones.
@@ -1469,7 +1462,9 @@ fn read_body(
     let scene = read_scene(&kept, &likeness, &colours, o, r, cue_stopped);
     let creep_reading = match &scene {
         Ok(rd) if rd.b1.is_none() => None,
-        _ => read_creep(sig, &dsc, &kept, &colours),
+        _ => tracks
+            .companion(sig, &dsc)
+            .and_then(|pair| read_creep(sig, pair, &kept, &colours)),
     };
     let reading = match (scene, creep_reading) {
         (Ok(rd), None) => rd,
@@ -1671,16 +1666,11 @@ fn read_body(
         // Impact geometry first, from the re-measured incoming line alone (the arcs are built
         // on it: a start whose arcs do not meet this P leaves the joint fit in a curved valley).
         let mut x0 = reading.x0.clone();
-        if let Some(li) = fit_line(&pb.incoming) {
-            let u = (-li.d.0, -li.d.1);
-            if let Some(p) = contact_point(li.p, u, o, r, 1.15) {
-                let alpha = (o.1 - p.1).atan2(o.0 - p.0);
-                let psi_s = wrap(u.1.atan2(u.0) - alpha);
-                if psi_s.abs() < 89.9f64.to_radians() {
-                    x0[3] = alpha;
-                    x0[4] = psi_s;
-                }
-            }
+        if let Some((_, alpha, psi_s)) =
+            fit_line(&pb.incoming).and_then(|li| impact_from_incoming(&li, o, r))
+        {
+            x0[3] = alpha;
+            x0[4] = psi_s;
         }
         let alpha = x0[3];
         let p_imp = (o.0 - 2.0 * r * alpha.cos(), o.1 - 2.0 * r * alpha.sin());
