@@ -116,6 +116,6 @@ mod tests {
             .zip(theirs.as_raw())
             .all(|(a, b)| a.to_bits() == b.to_bits());
         assert!(same, "8-bit conversion differs from image's");
-        assert_eq!(ours.data[3 * 255], 1.0);
+        assert_eq!(ours.data[3 * 255].to_bits(), 1.0f32.to_bits());
     }
 }
