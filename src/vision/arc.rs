@@ -54,7 +54,8 @@ use std::borrow::Cow;
 pub struct ArcFit {
     /// Start tangent direction in the image.
     pub delta: f64,
-    /// Its 1-sigma uncertainty (from the residual scale and the fit's curvature).
+    /// Its 1-sigma uncertainty: the fit's own (residual scale, curvature, correlation), the
+    /// held rolling direction's (`∂δ/∂θ` times `theta_sd`) and a measured systematic part.
     pub delta_sd: f64,
     /// An arc turning [`RIVAL_TURN_DEG`] more or less fits nearly as well: the start tangent
     /// is not measured, whatever `delta_sd` says.
@@ -86,6 +87,8 @@ pub struct ArcGeometry {
     pub object_dir: (f64, f64),
     /// Starting guess of the start tangent (image angle), if the centre-line fit has one.
     pub delta_guess: Option<f64>,
+    /// The stated 1-sigma uncertainty of `theta` (rad), propagated into `δ`'s.
+    pub theta_sd: f64,
 }
 
 /// A disc with a soft edge of width `w`: coverage `K(d) = 1` out to `R - w/2`, falling linearly
@@ -1023,6 +1026,8 @@ const CONVERGED_LEG: f64 = 0.02;
 /// cost, the residual variance, the correlation factor, the residuals and the pixels kept.
 struct Stat {
     var: f64,
+    /// `∂δ/∂θ` at the optimum (linearised refit with `θ` moved).
+    d_delta_d_theta: f64,
     c0: f64,
     s2: f64,
     f: f64,
@@ -1049,21 +1054,33 @@ fn statistics(px: &Pixels, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option
         xk[k] += STEPS[k];
         *col = mask.var_columns(px, &px.outgoing(g, &xk));
     }
+    // The model's change with the rolling direction `θ` (held in the fit), for `∂δ/∂θ`.
+    let moved_theta = ArcGeometry {
+        theta: g.theta + STEPS[0],
+        ..*g
+    };
+    let dtheta = mask.var_columns(px, &px.outgoing(&moved_theta, x));
+    let derivative = |moved: &[f64; NVAR], base: &[f64; NLIN], fixed: &[f64; NFIX], h: f64| {
+        let moved = row_of(moved, fixed);
+        (0..NLIN)
+            .map(|a| coef[a] * (moved[a] - base[a]))
+            .sum::<f64>()
+            / h
+    };
     let mut row = vec![0.0; np];
+    let mut jt_theta = vec![0.0; np];
     for i in 0..px.q.len() {
         if !keep[i] {
             continue;
         }
         let base = row_of(&var[i], &mask.fixed[i]);
         for k in 0..3 {
-            let moved = row_of(&dcols[k][i], &mask.fixed[i]);
-            row[k] = (0..NLIN)
-                .map(|a| coef[a] * (moved[a] - base[a]))
-                .sum::<f64>()
-                / STEPS[k];
+            row[k] = derivative(&dcols[k][i], &base, &mask.fixed[i], STEPS[k]);
         }
         row[3..].copy_from_slice(&base);
+        let j_theta = derivative(&dtheta[i], &base, &mask.fixed[i], STEPS[0]);
         for a in 0..np {
+            jt_theta[a] += row[a] * j_theta;
             for b in a..np {
                 jtj[(a, b)] += row[a] * row[b];
             }
@@ -1071,6 +1088,12 @@ fn statistics(px: &Pixels, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option
     }
     let scale = symmetrise_and_scale(&mut jtj);
     let cov = jtj.try_inverse()?;
+    // The Gauss–Newton shift of the optimum per unit `θ`: `-[(JᵀJ)⁻¹ Jᵀ J_θ]_δ`, with the
+    // columns scaled as `cov` is.
+    let d_delta_d_theta = -(0..np)
+        .map(|b| cov[(0, b)] * jt_theta[b] / scale[b])
+        .sum::<f64>()
+        / scale[0];
     // Blocks of R/2; after the high-pass, whose box takes out every block mean at that scale,
     // blocks of the box's half-width.
     let side = if mask.highpass.is_some() {
@@ -1082,6 +1105,7 @@ fn statistics(px: &Pixels, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option
     let var = s2 * f * cov[(0, 0)] / (scale[0] * scale[0]);
     (var.is_finite() && var > 0.0).then_some(Stat {
         var,
+        d_delta_d_theta,
         c0,
         s2,
         f,
@@ -1144,6 +1168,7 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
     }
     let Stat {
         var,
+        d_delta_d_theta,
         c0,
         s2,
         f,
@@ -1191,14 +1216,31 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
                 );
             }
             // The short-arc rule above holds for the refit too.
-            (legs(&xf).0 >= MIN_ARC_R * g.r).then_some((xf, st.var))
+            (legs(&xf).0 >= MIN_ARC_R * g.r).then_some((xf, st.var, st.d_delta_d_theta))
         })
         .flatten();
-    let (x, var, systematic) = match filtered {
-        Some((xf, vf)) => (xf, vf, SYSTEMATIC_DELTA_HIGHPASS_DEG),
-        None if sig.plate => (x, var, SYSTEMATIC_DELTA_DEG),
-        None => (x, var, SYSTEMATIC_DELTA_NO_PLATE_DEG),
+    let highpass = filtered.is_some();
+    let (x, var, systematic, slope) = match filtered {
+        Some((xf, vf, sf)) => (xf, vf, SYSTEMATIC_DELTA_HIGHPASS_DEG, sf),
+        None if sig.plate => (x, var, SYSTEMATIC_DELTA_DEG, d_delta_d_theta),
+        None => (x, var, SYSTEMATIC_DELTA_NO_PLATE_DEG, d_delta_d_theta),
     };
+    // `θ` is held at the centre-line fit's value; where the arc is short or faint `δ` follows
+    // it several-fold (grazing photos without a plate: `θ` 0.3–0.4° off moved `δ` 0.9–2.0°),
+    // so its stated uncertainty enters `δ`'s through `∂δ/∂θ`.
+    let theta_part = if g.theta_sd.is_finite() {
+        (slope * g.theta_sd).powi(2)
+    } else {
+        f64::INFINITY
+    };
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!(
+            "arc: d delta / d theta {slope:.2}, theta's {:.3}° adds {:.3}° to delta's sigma",
+            g.theta_sd.to_degrees(),
+            theta_part.sqrt().to_degrees()
+        );
+    }
+    let var = var + theta_part;
     let (l0, l1) = legs(&x);
     Some(ArcFit {
         rival: rival < RIVAL_CHI2,
@@ -1211,7 +1253,7 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
             g.p.1 + l0 * x[0].sin() + l1 * g.theta.sin(),
         ),
         n_px: n,
-        highpass: filtered.is_some(),
+        highpass,
         rms: s2.sqrt(),
     })
 }
@@ -1313,6 +1355,7 @@ mod tests {
             o: (o.0 + 600.0, o.1 + 600.0),
             object_dir: (1.0, 0.0),
             delta_guess: None,
+            theta_sd: 0.0,
         };
         (frame, g)
     }
@@ -1429,6 +1472,37 @@ mod tests {
             }
         }
         assert!(partial >= 5 && full >= 2, "partial {partial}, full {full}");
+    }
+
+    /// The held rolling direction's uncertainty reaches `δ`'s: handed a `θ` 0.3° off, a short
+    /// arc's `δ` moves by twice that, and the stated sigma, told `θ`'s, grows to cover it.
+    /// Measured (session 18): `δ` moves 0.78° (refits with `θ` ∓0.3° move it −0.79° and
+    /// +1.02°; the linearised `∂δ/∂θ` is 2.1, so 0.64° of sigma); the error is 0.63°, the
+    /// sigma 0.42° blind and 0.76° told.
+    /// (At 1° the response is lopsided, −3.0° and +0.44°, beyond what one slope states.)
+    #[test]
+    fn a_wrong_rolling_direction_is_in_the_start_tangents_sigma() {
+        let (delta, theta) = (100f64.to_radians(), 112f64.to_radians());
+        let (frame, mut g) = scene(delta, theta, 0.4 * R, 0.5 * R);
+        let exact = measure(&frame, &g, 0.005, Some(3));
+        g.theta += 0.3f64.to_radians();
+        let blind = measure(&frame, &g, 0.005, Some(3));
+        g.theta_sd = 0.3f64.to_radians();
+        let told = measure(&frame, &g, 0.005, Some(3));
+        let moved = (blind.delta - exact.delta).to_degrees();
+        assert!(moved.abs() > 0.6, "δ moved {moved:.3}° for θ's 0.3°");
+        assert!(
+            (told.delta - blind.delta).abs() < 1e-12,
+            "the sigma alone changes"
+        );
+        let err = (told.delta - delta).to_degrees();
+        let (sd_blind, sd_told) = (blind.delta_sd.to_degrees(), told.delta_sd.to_degrees());
+        // θ's part of the sigma is at least 1.5 × θ's, and the error lies within two sigmas.
+        let theta_part = (sd_told.powi(2) - sd_blind.powi(2)).sqrt();
+        assert!(
+            theta_part > 0.45 && err.abs() < 2.0 * sd_told,
+            "error {err:.3}°, sigma {sd_blind:.3}° blind, {sd_told:.3}° told"
+        );
     }
 
     #[test]

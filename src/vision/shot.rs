@@ -1827,6 +1827,7 @@ fn read_body(
             o: fit.o(),
             object_dir: fit.geom2().u0,
             delta_guess: (id != it && fit.sd(id).is_finite()).then(|| alpha + fit.params[id]),
+            theta_sd: calibrated_sd(fit.sd(it)),
         };
         let cue_u = reading.b1.map_or(sig.u, |b| colours[b]);
         let t_arc = std::time::Instant::now();
