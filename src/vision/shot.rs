@@ -799,6 +799,15 @@ const HIDDEN_PATH_PSI_MIN_DEG: f64 = 12.0;
 /// 0.00, delta2 2.7° off at 5.5 sigma; the demo's rubber shots 0.00–0.08, 0.5–3.3° off).
 pub const OBJECT_SLIDE_END_MIN: f64 = 0.3;
 
+/// Smallest end-to-start speed ratio `L₁/L₀` of a cue ball's slide read from its centre-line
+/// whose start tangent counts as measured. The table's friction ends a slide at the rolling
+/// velocity `5/7 v₀ + 2/7 (Rω × ẑ)`; for spins `r` of −1.2 to 1.6 (draw to strong follow) the
+/// part along `v₀` keeps `(5 + 2r)/7 ≥ 0.37` of it, so no cue ball ends its slide slower than
+/// about a third of its start. Fits far below are the streak's bends by the cloth's blotches
+/// read as a slide (grazing seed 81 without a plate, shot_023: a 425-px parabola ending at
+/// 0.00 of its start speed, delta1 2.0° off at 5 sigma).
+pub const CUE_SLIDE_END_MIN: f64 = 0.2;
+
 /// Largest `|theta2|` (degrees) of an object ball: its direction from the line of centres is
 /// the friction throw, `tan |delta2| <= mu` (and far less when the contact sticks); 35° would
 /// need `mu = 0.7` at full slip.
@@ -1976,6 +1985,22 @@ fn read_body(
             notes.push(format!(
                 "delta2 not resolved (the fitted slide ends at {ratio:.2} of its start speed, an \
                  object ball at about 2/3: the slide is hidden under the disc)"
+            ));
+        }
+    }
+    if !delta1_from_arc
+        && fit.m1 == Some(pathfit::PathModel::ParabolaLine)
+        && out.delta1_deg.is_some()
+    {
+        let (l0, l1) = pathfit::legs(&fit.params[fit.ball1_offset()..]);
+        let ratio = l1 / l0;
+        if ratio < CUE_SLIDE_END_MIN {
+            out.delta1_deg = None;
+            out.delta1_err_deg = None;
+            notes.retain(|n| !n.starts_with("delta1"));
+            notes.push(format!(
+                "delta1 not resolved (the cue ball's fitted slide ends at {ratio:.2} of its \
+                 start speed, where any spin leaves a third or more: the bend is not a slide)"
             ));
         }
     }
