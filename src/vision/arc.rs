@@ -19,8 +19,8 @@
 //! R = 100 px; the linearised sigma said 0.1°). The model of a cell mean is the dwell of a disc
 //! whose edge is a ramp of the same variance as the 1-px antialiasing ramp and the cell together
 //! ([`Kernel::for_cells`]): the mean of hard discs of radii spread uniformly over `R ± w/2`,
-//! integrated along each piece in closed form ([`Prepared::dwell`]). With it the same test gives mean errors of 0.03–0.07° and scatter
-//! of 0.04–0.14°.
+//! integrated along each piece in closed form ([`Prepared::dwell`]). With it the same test gives
+//! mean errors of 0.03–0.07° and scatter of 0.04–0.14°.
 //!
 //! Paths: the sliding arc is the quadratic Bézier `S = P, C = P + L₀ u(δ), P₁ = C + L₁ u(θ)`
 //! traversed uniformly in its parameter, which *is* constant acceleration; its speed runs from
@@ -289,6 +289,16 @@ fn y2_asinh_diff(u: f64, v: f64, du: f64, dv: f64, y2: f64) -> f64 {
     }
 }
 
+/// `∫ d² dt` and `∫ t dt` over `[u, v]`, `d² = t² + y²`: the parts of both integrands that are
+/// polynomials in `t`.
+#[inline]
+fn polynomial_parts(u: f64, v: f64, y2: f64) -> (f64, f64) {
+    (
+        (v.powi(3) - u.powi(3)) / 3.0 + y2 * (v - u),
+        0.5 * (v * v - u * u),
+    )
+}
+
 impl Integrals {
     /// `K = 1` on `[u, v]`.
     #[inline]
@@ -296,9 +306,10 @@ impl Integrals {
         if v <= u {
             return;
         }
+        let (i2, it) = polynomial_parts(u, v, y2);
         self.k0 += v - u;
-        self.k2 += (v.powi(3) - u.powi(3)) / 3.0 + y2 * (v - u);
-        self.kt += 0.5 * (v * v - u * u);
+        self.k2 += i2;
+        self.kt += it;
     }
 
     /// `K = (R + w/2 - d)/w` on `[u, v]` (a part where `d` lies between the two radii, so
@@ -313,10 +324,9 @@ impl Integrals {
         // ∫ d = (t d + y² asinh(t/|y|))/2; ∫ d² = t³/3 + y² t;
         // ∫ d³ = t (2t² + 5y²) d / 8 + 3 y² · y² asinh(t/|y|) / 8; ∫ t d = d³/3.
         let i1 = 0.5 * (v * dv - u * du + log);
-        let i2 = (v.powi(3) - u.powi(3)) / 3.0 + y2 * (v - u);
+        let (i2, it) = polynomial_parts(u, v, y2);
         let i3 = (v * (2.0 * v * v + 5.0 * y2) * dv - u * (2.0 * u * u + 5.0 * y2) * du) / 8.0
             + 0.375 * y2 * log;
-        let it = 0.5 * (v * v - u * u);
         let itd = (dv.powi(3) - du.powi(3)) / 3.0;
         let a = k.rmax;
         self.k0 += (a * (v - u) - i1) * k.inv_w;
@@ -1127,6 +1137,7 @@ pub fn fit(sig: &Signal, u: [f32; 3], g: &ArcGeometry) -> Option<ArcFit> {
 
 /// [`fit`], with the high-passed refit allowed or not (the unit tests compare the two).
 fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) -> Option<ArcFit> {
+    let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let cands = starts(g);
     let coarse = Pixels::gather(sig, u, g, &cands, ((g.r / 20.0).round() as usize).max(2));
     if coarse.q.len() < 100 {
@@ -1189,7 +1200,7 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
         })
         .map(|(_, r1)| (cost(&r1, keep) - c0) / (s2 * f))
         .fold(f64::INFINITY, f64::min);
-    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+    if debug {
         eprintln!("arc: an arc turning ±{RIVAL_TURN_DEG}° more costs Δχ² {rival:.1}");
     }
     if let Some(path) = std::env::var_os("STREAKFIT_ARC_DUMP") {
@@ -1206,7 +1217,7 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
             let fmask = Mask::new(&px, mask.keep.clone(), true);
             let (xf, _) = levenberg_marquardt(&px, g, x, &fmask, 15)?;
             let st = statistics(&px, g, &xf, &fmask)?;
-            if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+            if debug {
                 eprintln!(
                     "arc high-pass: delta {:+.3}° from the unfiltered fit, sd {:.3}° against \
                      {:.3}° (correlation factor {f:.1})",
@@ -1233,7 +1244,7 @@ fn fit_with(sig: &Signal, u: [f32; 3], g: &ArcGeometry, allow_highpass: bool) ->
     } else {
         f64::INFINITY
     };
-    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+    if debug {
         eprintln!(
             "arc: d delta / d theta {slope:.2}, theta's {:.3}° adds {:.3}° to delta's sigma",
             g.theta_sd.to_degrees(),

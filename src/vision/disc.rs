@@ -494,7 +494,8 @@ const COMPANION_LIT_LEVEL: f64 = 0.2;
 /// past it by `COMPANION_MIN_PROTRUSION_R` and end before `COMPANION_MAX_EXTENT_R` (a streak
 /// continues) must form one sector at least 30° wide, whose mean direction and greatest reach
 /// place the second disc's centre. Both discs are then refined from their outer halves
-/// ([`refine_excluding`]), and the second must have the first's radius within `COMPANION_RADIUS_TOL`.
+/// ([`refine_excluding`]), and the second must have the first's radius within
+/// `COMPANION_RADIUS_TOL`.
 pub fn companion(sig: &Signal, d: &Disc) -> Option<Companion> {
     let (o, r) = ((d.cx, d.cy), d.r);
     const N: usize = 180;

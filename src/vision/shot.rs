@@ -808,6 +808,19 @@ pub const OBJECT_SLIDE_END_MIN: f64 = 0.3;
 /// 0.00 of its start speed, delta1 2.0° off at 5 sigma).
 pub const CUE_SLIDE_END_MIN: f64 = 0.2;
 
+/// End-to-start speed ratio `L₁/L₀` of ball `ball`'s (1 cue, 2 object) fitted slide, when its
+/// path model has one.
+fn slide_end_ratio(fit: &JointFit, ball: usize) -> Option<f64> {
+    let (model, offset) = match ball {
+        1 => (fit.m1?, fit.ball1_offset()),
+        _ => (fit.m2, fit.ball2_offset()),
+    };
+    (model == pathfit::PathModel::ParabolaLine).then(|| {
+        let (l0, l1) = pathfit::legs(&fit.params[offset..]);
+        l1 / l0
+    })
+}
+
 /// Largest `|theta2|` (degrees) of an object ball: its direction from the line of centres is
 /// the friction throw, `tan |delta2| <= mu` (and far less when the contact sticks); 35° would
 /// need `mu = 0.7` at full slip.
@@ -1976,33 +1989,30 @@ fn read_body(
     // The object ball leaves without rolling and ends its slide at about two thirds of its
     // start speed: a fitted slide that ends far slower is the centre-line's kink where a slide
     // hidden under the disc ends, and its start tangent is not measured.
-    if fit.m2 == pathfit::PathModel::ParabolaLine && out.delta2_deg.is_some() {
-        let (l0, l1) = pathfit::legs(&fit.params[fit.ball2_offset()..]);
-        let ratio = l1 / l0;
-        if ratio < OBJECT_SLIDE_END_MIN {
-            out.delta2_deg = None;
-            out.delta2_err_deg = None;
-            notes.push(format!(
-                "delta2 not resolved (the fitted slide ends at {ratio:.2} of its start speed, an \
-                 object ball at about 2/3: the slide is hidden under the disc)"
-            ));
-        }
-    }
-    if !delta1_from_arc
-        && fit.m1 == Some(pathfit::PathModel::ParabolaLine)
-        && out.delta1_deg.is_some()
+    if out.delta2_deg.is_some()
+        && let Some(ratio) = slide_end_ratio(&fit, 2)
+        && ratio < OBJECT_SLIDE_END_MIN
     {
-        let (l0, l1) = pathfit::legs(&fit.params[fit.ball1_offset()..]);
-        let ratio = l1 / l0;
-        if ratio < CUE_SLIDE_END_MIN {
-            out.delta1_deg = None;
-            out.delta1_err_deg = None;
-            notes.retain(|n| !n.starts_with("delta1"));
-            notes.push(format!(
-                "delta1 not resolved (the cue ball's fitted slide ends at {ratio:.2} of its \
-                 start speed, where any spin leaves a third or more: the bend is not a slide)"
-            ));
-        }
+        out.delta2_deg = None;
+        out.delta2_err_deg = None;
+        notes.push(format!(
+            "delta2 not resolved (the fitted slide ends at {ratio:.2} of its start speed, an \
+             object ball at about 2/3: the slide is hidden under the disc)"
+        ));
+    }
+    // A cue ball's slide read from its centre-line (see `CUE_SLIDE_END_MIN`).
+    if !delta1_from_arc
+        && out.delta1_deg.is_some()
+        && let Some(ratio) = slide_end_ratio(&fit, 1)
+        && ratio < CUE_SLIDE_END_MIN
+    {
+        out.delta1_deg = None;
+        out.delta1_err_deg = None;
+        notes.retain(|n| !n.starts_with("delta1"));
+        notes.push(format!(
+            "delta1 not resolved (the cue ball's fitted slide ends at {ratio:.2} of its \
+             start speed, where any spin leaves a third or more: the bend is not a slide)"
+        ));
     }
     if arc_rival {
         notes.push(format!(
