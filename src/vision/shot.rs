@@ -1821,6 +1821,7 @@ fn read_body(
     let mut delta1_from_arc = false;
     let mut arc_rival = false;
     let mut arc_rest: Option<f64> = None;
+    let mut arc_hidden: Option<f64> = None;
     let mut short_line: Option<f64> = None;
     let mut angle = |idx: usize, sd: f64, name: &str| -> (Option<f64>, Option<f64>) {
         let sd = calibrated_sd(sd);
@@ -1869,24 +1870,34 @@ fn read_body(
             eprintln!("rolling line: clean span {:.2} R", span.unwrap_or(-1.0));
         }
         short_line = span.filter(|s| *s < MIN_ROLLING_SPAN_R);
-        let measured =
+        let fitted =
             (opts.arc_pixels && opts.path_models == PathModels::Auto && short_line.is_none())
-                .then(|| arc::fit(sig, cue_u, &geometry))
-                .flatten()
-                .filter(|a| {
-                    let end = along(a.end);
-                    if debug {
-                        eprintln!(
-                            "arc candidate: delta {:.3}° L0 {:.1} L1 {:.1}, end {:.1} px along \
+                .then(|| arc::fit(sig, cue_u, &geometry));
+        if let Some(Err(arc::ArcMiss::Hidden(l0))) = fitted {
+            // The pixels near P are the better witness of the start tangent (see the rivals
+            // below): when the turn hides in the cue ball's footprint, the centre-line fit's
+            // value is no answer either.
+            if debug {
+                eprintln!("arc: the best arc's first leg is {l0:.2} R: hidden at P");
+            }
+            out.delta1_deg = None;
+            out.delta1_err_deg = None;
+            arc_hidden = Some(l0);
+        }
+        let measured = fitted.and_then(Result::ok).filter(|a| {
+            let end = along(a.end);
+            if debug {
+                eprintln!(
+                    "arc candidate: delta {:.3}° L0 {:.1} L1 {:.1}, end {:.1} px along \
                          theta, first centre-line sample {first_sample:?}",
-                            deg(m * wrap(a.delta - alpha)),
-                            a.l0,
-                            a.l1,
-                            end
-                        );
-                    }
-                    first_sample.is_none_or(|f| end <= f + 0.5 * geometry.r)
-                });
+                    deg(m * wrap(a.delta - alpha)),
+                    a.l0,
+                    a.l1,
+                    end
+                );
+            }
+            first_sample.is_none_or(|f| end <= f + 0.5 * geometry.r)
+        });
         if let Some(a) = measured {
             if debug {
                 eprintln!(
@@ -1972,13 +1983,23 @@ fn read_body(
         out.fit = Some(fit);
         return out;
     }
-    if delta1_from_arc || arc_rival || arc_rest.is_some() || short_line.is_some() {
+    if delta1_from_arc
+        || arc_rival
+        || arc_rest.is_some()
+        || arc_hidden.is_some()
+        || short_line.is_some()
+    {
         notes.retain(|n| !n.starts_with("delta1"));
     }
     if let Some(span) = short_line {
         notes.push(format!(
             "delta1 not resolved (the cue ball's rolling line is clear of the other streaks for \
              only {span:.1} R, too short to fix where its sliding arc ends)"
+        ));
+    } else if let Some(l0) = arc_hidden {
+        notes.push(format!(
+            "delta1 not resolved (the arc that best fits the light at the impact has a first \
+             leg of {l0:.2} R, inside the cue ball's own disc there: its turn is hidden)"
         ));
     } else if let Some(d) = arc_rest {
         notes.push(format!(
