@@ -666,3 +666,30 @@ fn a_turn_hidden_at_a_rubber_impact_is_not_read() {
     assert!(err(shot.psi_deg, "psi_deg") < 0.15, "{shot:#?}");
     assert!(err(shot.theta1_deg, "theta1_deg") < 0.2, "{shot:#?}");
 }
+
+#[test]
+fn a_straight_cue_path_over_a_short_stretch_is_not_read() {
+    // Seed 202's clean shot_024 (psi 7.3°, rolling): the cue ball's streak is clear of the others
+    // for only 0.9 R, 4.8 R from P. The joint fit takes it for a straight path from P, whose
+    // direction the hidden sliding arc's offset tilts: theta1 read 1.4° off at a stated 0.06°
+    // until session 19. Needs the folder's texture (a single photo is declined): 24 photos.
+    let dir = scratch("short_straight_cue");
+    synth(&dir, "clean", 24, 202, &["--size", "2400x1600"]);
+    let out = dir.join("angles.csv");
+    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    assert!(o.status.code().is_some(), "extract crashed");
+    let rows = read_angle_table(&out).unwrap();
+    let t = truth(&dir);
+    let shot = rows.iter().find(|r| r.file == "shot_024.png").unwrap();
+    assert_eq!(shot.status, Status::Ok, "{shot:#?}");
+    assert!(shot.theta1_deg.is_none(), "{shot:#?}");
+    assert!(
+        shot.reason
+            .contains("too short to tell a straight path from P from a hidden slide"),
+        "{shot:#?}"
+    );
+    let err =
+        |v: Option<f64>, k: &str| (v.unwrap() - t["shot_024.png"][k].parse::<f64>().unwrap()).abs();
+    assert!(err(shot.psi_deg, "psi_deg") < 0.1, "{shot:#?}");
+    assert!(err(shot.theta2_deg, "theta2_deg") < 0.1, "{shot:#?}");
+}

@@ -1841,6 +1841,7 @@ fn read_body(
         ));
     }
     let mut delta1_from_arc = false;
+    let mut line_note: Option<String> = None;
     let mut arc_rival = false;
     let mut arc_rest: Option<f64> = None;
     let mut arc_hidden: Option<f64> = None;
@@ -1979,6 +1980,24 @@ fn read_body(
             out.delta1_err_deg = None;
         }
         (out.theta1_deg, out.theta1_err_deg) = angle(it, fit.sd(it), "theta1");
+        // A straight path is forced through P: over a short clean stretch far from P its
+        // samples cannot show the hidden sliding arc whose offset tilts that line (on 26
+        // synthetic sets, 500 `theta1` readings, the three `line` readings over less than 4 R
+        // were all wrong, spans 0.9–1.9 R: 1.4° off at 0.06°, 1.9° at 0.28°, 2.6° at 0.46°; the
+        // other 28 spanned 4 R or more; `parabola+line` readings over short stretches were not
+        // worse than the rest).
+        if let Some(s) = span
+            && fit.m1 == Some(pathfit::PathModel::Line)
+            && s < MIN_ROLLING_SPAN_R
+            && out.theta1_deg.is_some()
+        {
+            out.theta1_deg = None;
+            out.theta1_err_deg = None;
+            line_note = Some(format!(
+                "theta1 not resolved (the cue ball's streak is clear of the other streaks for \
+                 only {s:.1} R, too short to tell a straight path from P from a hidden slide)"
+            ));
+        }
     }
     let (id, it) = fit.angle_indices(2).expect("object ball always has a path");
     (out.theta2_deg, out.theta2_err_deg) = angle(it, fit.sd(it), "theta2");
@@ -2057,6 +2076,7 @@ fn read_body(
              start speed, where any spin leaves a third or more: the bend is not a slide)"
         ));
     }
+    notes.extend(line_note);
     if arc_rival {
         notes.push(format!(
             "delta1 not resolved (an arc turning {}° more or less fits the light at the impact \
