@@ -66,6 +66,16 @@ fn truth(dir: &Path) -> HashMap<String, HashMap<String, String>> {
         .collect()
 }
 
+/// |measured − true| of row `r`'s value `v` of the truth column `key`.
+fn abs_error(
+    t: &HashMap<String, HashMap<String, String>>,
+    r: &ShotRow,
+    v: Option<f64>,
+    key: &str,
+) -> f64 {
+    (v.expect("a measured value") - t[&r.file][key].parse::<f64>().unwrap()).abs()
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -333,9 +343,7 @@ fn a_hook_hidden_along_the_object_balls_streak_is_not_read() {
     assert!(o.status.code().is_some(), "extract crashed");
     let rows = read_angle_table(&out).unwrap();
     let t = truth(&dir);
-    let err = |r: &ShotRow, v: Option<f64>, k: &str| {
-        (v.unwrap() - t[&r.file][k].parse::<f64>().unwrap()).abs()
-    };
+    let err = |r: &ShotRow, v: Option<f64>, k: &str| abs_error(&t, r, v, k);
     let hook = rows.iter().find(|r| r.file == "shot_007.png").unwrap();
     assert_eq!(hook.status, Status::Ok, "{hook:#?}");
     assert!(hook.delta1_deg.is_none(), "{hook:#?}");
@@ -645,14 +653,11 @@ fn a_turn_hidden_at_a_rubber_impact_is_not_read() {
     );
     let one = dir.join("one");
     std::fs::create_dir_all(&one).unwrap();
-    for f in ["shot_019.png", "scene.toml"] {
+    for f in ["shot_019.png", "scene.toml", "truth.csv"] {
         std::fs::copy(dir.join(f), one.join(f)).unwrap();
     }
-    let out = dir.join("angles.csv");
-    let o = extract(&[one.as_os_str(), "--out".as_ref(), out.as_os_str()]);
-    assert!(o.status.success(), "{o:?}");
-    let rows = read_angle_table(&out).unwrap();
-    let t = truth(&dir);
+    let (_, rows) = extract_errors(&one, 1, &[]);
+    let t = truth(&one);
     let shot = &rows[0];
     assert_eq!(shot.status, Status::Ok, "{shot:#?}");
     assert!(shot.delta1_deg.is_none(), "{shot:#?}");
@@ -661,10 +666,14 @@ fn a_turn_hidden_at_a_rubber_impact_is_not_read() {
             .contains("delta1 not resolved (an arc turning 10° more or less fits"),
         "{shot:#?}"
     );
-    let err =
-        |v: Option<f64>, k: &str| (v.unwrap() - t["shot_019.png"][k].parse::<f64>().unwrap()).abs();
-    assert!(err(shot.psi_deg, "psi_deg") < 0.15, "{shot:#?}");
-    assert!(err(shot.theta1_deg, "theta1_deg") < 0.2, "{shot:#?}");
+    assert!(
+        abs_error(&t, shot, shot.psi_deg, "psi_deg") < 0.15,
+        "{shot:#?}"
+    );
+    assert!(
+        abs_error(&t, shot, shot.theta1_deg, "theta1_deg") < 0.2,
+        "{shot:#?}"
+    );
 }
 
 #[test]
@@ -675,10 +684,7 @@ fn a_straight_cue_path_over_a_short_stretch_is_not_read() {
     // until session 19. Needs the folder's texture (a single photo is declined): 24 photos.
     let dir = scratch("short_straight_cue");
     synth(&dir, "clean", 24, 202, &["--size", "2400x1600"]);
-    let out = dir.join("angles.csv");
-    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
-    assert!(o.status.code().is_some(), "extract crashed");
-    let rows = read_angle_table(&out).unwrap();
+    let (_, rows) = extract_errors(&dir, 24, &[]);
     let t = truth(&dir);
     let shot = rows.iter().find(|r| r.file == "shot_024.png").unwrap();
     assert_eq!(shot.status, Status::Ok, "{shot:#?}");
@@ -688,8 +694,12 @@ fn a_straight_cue_path_over_a_short_stretch_is_not_read() {
             .contains("too short to tell a straight path from P from a hidden slide"),
         "{shot:#?}"
     );
-    let err =
-        |v: Option<f64>, k: &str| (v.unwrap() - t["shot_024.png"][k].parse::<f64>().unwrap()).abs();
-    assert!(err(shot.psi_deg, "psi_deg") < 0.1, "{shot:#?}");
-    assert!(err(shot.theta2_deg, "theta2_deg") < 0.1, "{shot:#?}");
+    assert!(
+        abs_error(&t, shot, shot.psi_deg, "psi_deg") < 0.1,
+        "{shot:#?}"
+    );
+    assert!(
+        abs_error(&t, shot, shot.theta2_deg, "theta2_deg") < 0.1,
+        "{shot:#?}"
+    );
 }

@@ -1126,6 +1126,18 @@ fn statistics(px: &Pixels, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option
     })
 }
 
+/// [`ArcMiss::Hidden`] when the arc `x`'s first leg is under [`MIN_ARC_R`]: it lies inside the
+/// cue ball's own footprint at `P` (at small psi such fits had collapsed onto the rolling line,
+/// 30–48° off, with small stated errors).
+fn visible(x: &[f64; 3], g: &ArcGeometry) -> Result<(), ArcMiss> {
+    let l0 = legs(x).0;
+    if l0 < MIN_ARC_R * g.r {
+        Err(ArcMiss::Hidden(l0 / g.r))
+    } else {
+        Ok(())
+    }
+}
+
 /// The least cost rise (in units of `s2f`, the correlation-widened residual variance) of the
 /// arcs turning [`RIVAL_TURN_DEG`] more (and, unless `more_only`, less) than the optimum `x`
 /// (cost `c0`), their start tangents held and their legs refitted from [`RIVAL_LEG_R`].
@@ -1139,11 +1151,7 @@ fn rival_cost(
 ) -> f64 {
     let leg = RIVAL_LEG_R * g.r;
     // The sign of the turn from `θ` to `δ`: adding it turns the arc more.
-    let more = if (x[0] - g.theta).sin() >= 0.0 {
-        1.0
-    } else {
-        -1.0
-    };
+    let more = 1f64.copysign((x[0] - g.theta).sin());
     let sides: &[f64] = if more_only { &[1.0] } else { &[-1.0, 1.0] };
     sides
         .iter()
@@ -1218,13 +1226,8 @@ fn fit_with(
     let mask = Mask::new(&px, res.iter().map(|r| r.abs() <= 4.0 * s).collect(), false);
     let (x, _) = levenberg_marquardt(&px, g, x, &mask, 15).ok_or(ArcMiss::NoFit)?;
     let keep = &mask.keep;
-    // An arc much shorter than the ball's radius lies inside the cue ball's own footprint at
-    // P: its start tangent is not in the light (at small psi such fits collapsed onto the
-    // rolling line, 30–48° off, with small stated errors).
-    let l0 = legs(&x).0;
-    if l0 < MIN_ARC_R * g.r {
-        return Err(ArcMiss::Hidden(l0 / g.r));
-    }
+    // An arc much shorter than the ball's radius: its start tangent is not in the light.
+    visible(&x, g)?;
     let Stat {
         var,
         d_delta_d_theta,
@@ -1253,57 +1256,48 @@ fn fit_with(
     // on the unfiltered light first (the rivals above), whose correlation factor sees the
     // blotches: on the filtered residuals it is near 1, and rivals alone there passed arcs that
     // fit nearly as well (a rubber shot 8° off at a stated 1.2°).
-    let filtered = (allow_highpass && f >= HIGHPASS_MIN_F)
-        .then(|| {
-            let fmask = Mask::new(&px, mask.keep.clone(), true);
-            let (xf, _) = levenberg_marquardt(&px, g, x, &fmask, 15)?;
-            // On the filtered light the arc is hidden in the cue ball's footprint at `P`: the
-            // unfiltered optimum (a longer arc that fits the blotches' and the brightness
-            // profile's slow changes) does not measure the turn either.
-            if legs(&xf).0 < MIN_ARC_R * g.r {
-                if debug {
-                    eprintln!(
-                        "arc high-pass: the best arc's first leg is {:.2} R: hidden at P",
-                        legs(&xf).0 / g.r
-                    );
-                }
-                return Some(Err(legs(&xf).0 / g.r));
-            }
-            let st = statistics(&px, g, &xf, &fmask)?;
-            if debug {
-                eprintln!(
-                    "arc high-pass: delta {:+.3}° from the unfiltered fit, sd {:.3}° against \
-                     {:.3}° (correlation factor {f:.1})",
-                    (xf[0] - x[0]).to_degrees(),
-                    st.var.sqrt().to_degrees(),
-                    var.sqrt().to_degrees(),
-                );
-            }
-            // The rivals again, on the filtered light, where the unfiltered ones did not
-            // already decide: its cost may have a lower branch that the refit from the
-            // unfiltered optimum does not reach (demo rubber shot_019, psi 16°: from a 2.9 R arc
-            // turning 6° the refit ended on a 0.36 R arc still turning 6°, 19° off, while the
-            // true 0.1 R arc turning 25° costs 236 units less; the rival turning 10° more finds
-            // that branch, 142 units below the refit). Only the rival turning more: a turn
-            // hidden where the streaks overlap reads too small.
-            let rival_f = if rival < RIVAL_CHI2 {
-                rival
-            } else {
-                rival_cost(&px, g, &xf, &fmask, (st.c0, st.s2 * st.f), true)
-            };
-            if debug {
-                eprintln!(
-                    "arc high-pass: an arc turning {RIVAL_TURN_DEG}° more costs Δχ² {rival_f:.1}"
-                );
-            }
-            Some(Ok((xf, st.var, st.d_delta_d_theta, rival_f)))
-        })
-        .flatten();
-    let filtered = match filtered {
-        Some(Err(l0_r)) => return Err(ArcMiss::Hidden(l0_r)),
-        Some(Ok(fit)) => Some(fit),
-        None => None,
-    };
+    let fmask =
+        (allow_highpass && f >= HIGHPASS_MIN_F).then(|| Mask::new(&px, mask.keep.clone(), true));
+    let refit = fmask
+        .as_ref()
+        .and_then(|fm| levenberg_marquardt(&px, g, x, fm, 15))
+        .map(|(xf, _)| xf);
+    // On the filtered light the arc is hidden in the cue ball's footprint at `P`: the
+    // unfiltered optimum (a longer arc that fits the blotches' and the brightness profile's
+    // slow changes) does not measure the turn either.
+    if let Some(xf) = &refit {
+        visible(xf, g)?;
+    }
+    let filtered = refit.zip(fmask.as_ref()).and_then(|(xf, fmask)| {
+        let st = statistics(&px, g, &xf, fmask)?;
+        if debug {
+            eprintln!(
+                "arc high-pass: delta {:+.3}° from the unfiltered fit, sd {:.3}° against \
+                 {:.3}° (correlation factor {f:.1})",
+                (xf[0] - x[0]).to_degrees(),
+                st.var.sqrt().to_degrees(),
+                var.sqrt().to_degrees(),
+            );
+        }
+        // The rivals again, on the filtered light, where the unfiltered ones did not
+        // already decide: its cost may have a lower branch that the refit from the
+        // unfiltered optimum does not reach (demo rubber shot_019, psi 16°: from a 2.9 R arc
+        // turning 6° the refit ended on a 0.36 R arc still turning 6°, 19° off, while the
+        // true 0.1 R arc turning 25° costs 236 units less; the rival turning 10° more finds
+        // that branch, 142 units below the refit). Only the rival turning more: a turn
+        // hidden where the streaks overlap reads too small.
+        let rival_f = if rival < RIVAL_CHI2 {
+            rival
+        } else {
+            rival_cost(&px, g, &xf, fmask, (st.c0, st.s2 * st.f), true)
+        };
+        if debug {
+            eprintln!(
+                "arc high-pass: an arc turning {RIVAL_TURN_DEG}° more costs Δχ² {rival_f:.1}"
+            );
+        }
+        Some((xf, st.var, st.d_delta_d_theta, rival_f))
+    });
     let highpass = filtered.is_some();
     let rival = rival.min(filtered.map_or(f64::INFINITY, |f| f.3));
     let (x, var, systematic, slope) = match filtered {
