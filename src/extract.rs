@@ -284,6 +284,7 @@ pub fn process(
                     row.delta2_err_deg = a.delta2_err_deg;
                     row.theta1_err_deg = a.theta1_err_deg;
                     row.theta2_err_deg = a.theta2_err_deg;
+                    row.frame_err_deg = a.frame_err_deg;
                     row.path_model1 = a.path_model1.clone();
                     row.path_model2 = a.path_model2.clone();
                     row.cloth_model = a.cloth.map(|c| c.as_str().to_string());

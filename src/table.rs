@@ -54,6 +54,9 @@ pub struct ShotRow {
     pub delta2_err_deg: Option<f64>,
     pub theta1_err_deg: Option<f64>,
     pub theta2_err_deg: Option<f64>,
+    /// 1-sigma of the line of centres' direction, the part of every `*_err_deg` that the five
+    /// angles share (an error in it moves them all by the same amount, same sign).
+    pub frame_err_deg: Option<f64>,
     /// Path model used per outgoing ball: `line` or `parabola+line`.
     pub path_model1: Option<String>,
     pub path_model2: Option<String>,
@@ -92,6 +95,7 @@ impl ShotRow {
             delta2_err_deg: None,
             theta1_err_deg: None,
             theta2_err_deg: None,
+            frame_err_deg: None,
             path_model1: None,
             path_model2: None,
             cloth_model: None,
@@ -116,7 +120,7 @@ use polars::prelude::{
 use std::path::Path;
 
 /// Float columns of the angles table, in output order (after the string columns).
-const FLOAT_COLUMNS: [&str; 16] = [
+const FLOAT_COLUMNS: [&str; 17] = [
     "psi_deg",
     "delta1_deg",
     "delta2_deg",
@@ -127,6 +131,7 @@ const FLOAT_COLUMNS: [&str; 16] = [
     "delta2_err_deg",
     "theta1_err_deg",
     "theta2_err_deg",
+    "frame_err_deg",
     "ball_radius_px",
     "impact_x_px",
     "impact_y_px",
@@ -173,6 +178,7 @@ fn float_of(row: &ShotRow, name: &str) -> Option<f64> {
         "delta2_err_deg" => row.delta2_err_deg,
         "theta1_err_deg" => row.theta1_err_deg,
         "theta2_err_deg" => row.theta2_err_deg,
+        "frame_err_deg" => row.frame_err_deg,
         "ball_radius_px" => row.ball_radius_px,
         "impact_x_px" => row.impact_x_px,
         "impact_y_px" => row.impact_y_px,
@@ -387,6 +393,7 @@ pub fn rows_from_frame(df: &DataFrame) -> Result<Vec<ShotRow>> {
             delta2_err_deg: g("delta2_err_deg", i),
             theta1_err_deg: g("theta1_err_deg", i),
             theta2_err_deg: g("theta2_err_deg", i),
+            frame_err_deg: g("frame_err_deg", i),
             path_model1: pm1[i].clone(),
             path_model2: pm2[i].clone(),
             cloth_model: cloth[i].clone(),
@@ -414,6 +421,7 @@ mod tests {
         a.theta2_deg = None;
         a.psi_err_deg = Some(0.2);
         a.theta1_err_deg = Some(0.4);
+        a.frame_err_deg = Some(0.15);
         a.path_model1 = Some("parabola+line".into());
         a.spin = Some(1.0);
         a.seconds = 0.75;
