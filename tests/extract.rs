@@ -727,3 +727,25 @@ fn a_straight_cue_path_over_a_short_stretch_is_not_read() {
         "{shot:#?}"
     );
 }
+
+#[test]
+fn a_coloured_ball_resting_at_the_impact_point_is_seen() {
+    // Realistic seed 404's shot_019 (psi 7°, stun, rubber): the white cue ball creeps to rest
+    // 1.7 R from the coloured object ball's waiting disc. Read as the object ball's disc, it put
+    // the coloured ball at P, where along the photo's mean ball colour its rim is only 0.28 of
+    // the white disc's contrast, below the 0.3 of a resting ball: the streaks were read with
+    // their roles swapped, psi 12° off at a stated 0.16°, theta2 24° off. Against the light of
+    // the streak the reading calls its own (7.7 times it), it is a ball at rest, and a ball
+    // resting at P at psi 19° is a misreading: declined. Needs the folder's texture: 24 photos.
+    let dir = scratch("coloured_rest_at_p");
+    synth(&dir, "realistic", 24, 404, &["--size", "2400x1600"]);
+    let (_, rows) = extract_errors(&dir, 24, &[]);
+    let _ = std::fs::remove_dir_all(&dir);
+    let shot = rows.iter().find(|r| r.file == "shot_019.jpg").unwrap();
+    assert_eq!(shot.status, Status::Declined, "{shot:#?}");
+    assert!(
+        shot.reason.contains("a ball rests at the impact point"),
+        "{shot:#?}"
+    );
+    assert!(shot.theta2_deg.is_none(), "{shot:#?}");
+}

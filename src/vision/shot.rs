@@ -784,6 +784,16 @@ const INCOMING_ARROW_MAX: f64 = 1.0;
 /// Fraction of the object disc's contrast that [`rim_at`] must reach for a ball at rest at P.
 const REST_RIM: f64 = 0.3;
 
+/// Multiple of the incoming streak's light (its samples' median amplitude) that [`rim_at`] at P
+/// must reach for the ball that painted it to rest there, whatever the disc's colour. A ball at
+/// rest for the rest of the exposure is several times as bright as its own streak, whose
+/// pixels it covers for `2R/v` only (measured on 26 synthetic sets: 10.4 for a head-on stun
+/// shot's cue ball; cue-ball paths hidden near P 0.67–1.2 on every `ok` reading). Realistic
+/// seed 404 shot_019 (psi 7°) read the cue ball crept to rest as the object ball's disc and the
+/// coloured object ball at P at 0.28 of that disc's contrast but 7.7 times the light of the
+/// streak read as incoming (its own): psi 12° off at a stated 0.16°.
+const REST_OVER_STREAK: f64 = 3.0;
+
 /// Largest impact angle (degrees) at which a cue ball can stop at P: after an oblique impact
 /// it keeps its tangential speed `v sin psi`, and even at 3° (5 % of `v`) it rolls on for most
 /// of a ball diameter per 0.1 s.
@@ -1580,9 +1590,18 @@ fn read_body(
             return out;
         }
         let rim = rim_at(sig, p, r) / dsc.contrast;
-        cue_at_rest = rim >= REST_RIM;
+        // The same light against the incoming streak's, which the same ball painted in the same
+        // colour: the disc's contrast is another ball's, and a coloured ball resting at P shows
+        // weakly along the photo's mean ball colour.
+        let mut amps: Vec<f32> = kept[reading.inc].iter().map(|q| q.amp as f32).collect();
+        let inc_amp = f64::from(background::median(&mut amps));
+        let over_streak = rim * dsc.contrast / inc_amp;
+        cue_at_rest = rim >= REST_RIM || (inc_amp > 0.0 && over_streak >= REST_OVER_STREAK);
         if debug {
-            eprintln!("two streaks: rim at P {rim:.3} of the disc contrast");
+            eprintln!(
+                "two streaks: rim at P {rim:.3} of the disc contrast, {over_streak:.2} of the \
+                 incoming streak's light"
+            );
         }
     }
     for (i, s) in out.streaks.iter_mut().enumerate() {
