@@ -491,6 +491,15 @@ fn a_shared_error_of_all_five_angles_is_profiled_out() {
                 "seed {seed}: mu {mu} ± {mu_se}"
             );
         }
+        // The error model used is stated.
+        assert!(
+            with.notes
+                .iter()
+                .any(|n| n.starts_with("40 of 40 shots state")),
+            "{:?}",
+            with.notes
+        );
+        assert!(!without.notes.iter().any(|n| n.contains("frame_err_deg")));
         let ratio = without.e_se.unwrap() / with.e_se.unwrap();
         assert!(
             ratio > 4.0,

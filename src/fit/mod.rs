@@ -1178,6 +1178,16 @@ fn summarise(
         let rel = (mu0_se.unwrap_or(0.0) / mu0).hypot(se[0] / (1.0 + g[0]));
         psi_l_se = Some((x / pl.sin().max(1e-9) * rel).to_degrees());
     }
+    // Which error model the angles had: a shared shift of each photo's five angles (the
+    // extractor's `frame_err_deg`) changes what the stated errors mean.
+    let n_frame = shots.iter().filter(|s| s.frame_sigma > 0.0).count();
+    if n_frame > 0 {
+        notes.push(format!(
+            "{n_frame} of {} shots state their angles' shared error (frame_err_deg): fitted as \
+             one shift per shot",
+            shots.len()
+        ));
+    }
     // Bounds on mu0 when every shot is on one side of the switch.
     let crit: Vec<f64> = shots
         .iter()
