@@ -96,6 +96,36 @@ impl Signal<'_> {
     pub fn coarse_at(&self, x: usize, y: usize) -> f32 {
         self.coarse[y * self.cw + x]
     }
+
+    /// The same photo's signal for balls of colour direction `u` instead of the mean one (a
+    /// dark object ball on a light cloth, whose light the mean direction, set by the brighter
+    /// balls, shows as negative or not at all). Borrows the full-resolution pixels.
+    pub fn recoloured(&self, u: [f32; 3]) -> Signal<'_> {
+        let proj = projector(&self.cov_inv, u);
+        let coarse: Vec<f32> = self
+            .coarse_diff
+            .iter()
+            .map(|d| proj[0] * d[0] + proj[1] * d[1] + proj[2] * d[2])
+            .collect();
+        let sigma_coarse = mad_sigma(&coarse).max(1e-6);
+        Signal {
+            w: self.w,
+            h: self.h,
+            rgb: std::borrow::Cow::Borrowed(&self.rgb),
+            f: self.f,
+            cw: self.cw,
+            ch: self.ch,
+            coarse,
+            coarse_diff: self.coarse_diff.clone(),
+            sigma_coarse,
+            u,
+            proj,
+            cov_inv: self.cov_inv,
+            cloth_level: self.cloth_level,
+            plate: self.plate,
+            cloth: self.cloth,
+        }
+    }
 }
 
 /// Fraction of pixels with any channel at full scale.

@@ -121,6 +121,87 @@ pub fn find_candidates(sig: &Signal, k: usize) -> Result<Vec<CoarseDisc>, String
     Ok(out)
 }
 
+/// Compact blobs of any colour, most distinct first, with their colour directions (unit, ball
+/// minus cloth): the maxima of the Mahalanobis norm of the smoothed coarse colour difference
+/// under the cloth's colour covariance, above its median by at least 6 of its MAD sigmas. Unlike
+/// [`find_candidates`] this sees balls darker than the cloth (a maroon or black ball on a light
+/// cloth), whose light is negative along the photo's mean ball colour.
+pub fn find_colour_candidates(sig: &Signal, k: usize) -> Vec<(CoarseDisc, [f32; 3])> {
+    let (w, h) = (sig.cw, sig.ch);
+    let chans: Vec<Vec<f32>> = (0..3)
+        .map(|c| {
+            let v: Vec<f32> = sig.coarse_diff.iter().map(|d| d[c]).collect();
+            box_blur(&v, w, h, 1)
+        })
+        .collect();
+    let ci = &sig.cov_inv;
+    let norm: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let b = [0, 1, 2].map(|c| f64::from(chans[c][i]));
+            let q: f64 = (0..3)
+                .map(|a| (0..3).map(|c| b[a] * ci[a][c] * b[c]).sum::<f64>())
+                .sum();
+            q.max(0.0).sqrt() as f32
+        })
+        .collect();
+    let level = median_of(&norm);
+    let noise = super::background::mad_sigma_about(&norm, level).max(1e-7);
+    let mut s: Vec<f32> = norm.iter().map(|v| v - level).collect();
+    let mut out = Vec::new();
+    while out.len() < k {
+        let Some((imax, &m)) = s.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) else {
+            break;
+        };
+        if m < 6.0 * noise {
+            break;
+        }
+        let Ok(c) = blob_at(sig, &s, imax, m) else {
+            break;
+        };
+        let f = sig.f as f64;
+        mask_disc(
+            &mut s,
+            w,
+            h,
+            (c.cx / f - 0.5, c.cy / f - 0.5),
+            1.3 * c.r / f + 1.0,
+        );
+        // The colour: the mean difference over the disc's inner part.
+        if let Some(u) = mean_colour(sig, (c.cx, c.cy), 0.7 * c.r) {
+            out.push((c, u));
+        }
+    }
+    out
+}
+
+/// Unit direction of the mean coarse colour difference (ball minus cloth) over the disc of
+/// radius `rho` around `c` (full-resolution pixels); `None` where it vanishes.
+pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
+    let f = sig.f as f64;
+    let (cx, cy, rc) = (c.0 / f - 0.5, c.1 / f - 0.5, rho / f);
+    let mut acc = [0f64; 3];
+    let (y0, y1) = (
+        (cy - rc).floor().max(0.0) as usize,
+        (cy + rc).ceil() as usize,
+    );
+    let (x0, x1) = (
+        (cx - rc).floor().max(0.0) as usize,
+        (cx + rc).ceil() as usize,
+    );
+    for y in y0..=y1.min(sig.ch - 1) {
+        for x in x0..=x1.min(sig.cw - 1) {
+            if (x as f64 - cx).hypot(y as f64 - cy) <= rc {
+                let d = sig.coarse_diff[y * sig.cw + x];
+                for a in 0..3 {
+                    acc[a] += f64::from(d[a]);
+                }
+            }
+        }
+    }
+    let n = (acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2]).sqrt();
+    (n > 0.0).then(|| acc.map(|v| (v / n) as f32))
+}
+
 /// Sets the smoothed signal inside a circle (coarse pixels) to minus infinity.
 fn mask_disc(s: &mut [f32], w: usize, h: usize, c: (f64, f64), rr: f64) {
     let (x0, x1) = (
