@@ -2,8 +2,10 @@
 //!
 //! The angles table has one row per input image: `file, status (ok|declined|error), reason,
 //! material, psi_deg, delta1_deg, delta2_deg, theta1_deg, theta2_deg, *_err_deg (1 sigma),
-//! path_model1, path_model2, cloth_model, ball_radius_px, impact_x_px, impact_y_px, spin, english,
-//! seconds`. `cloth_model` says what the cloth was modelled from: `plate` (an empty-table photo),
+//! frame_err_deg, path_model1, path_model2, cloth_model, ball_radius_px, impact_x_px,
+//! impact_y_px, spin, english, seconds`. `frame_err_deg` is the part of every `*_err_deg` that a
+//! row's five angles share: all are read from the photo's line of centres, and an error in its
+//! direction moves them all by the same amount, same sign (`fit` fits it as one shift per row). `cloth_model` says what the cloth was modelled from: `plate` (an empty-table photo),
 //! `texture` (the folder's fixed cloth texture on the photo's own surface) or `surface` (the
 //! photo's own smooth surface only); null when the photo never got that far.
 //! Undefined angles (a ball that stops) are nulls, never numbers. Positions (`impact_x_px`,

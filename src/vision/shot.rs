@@ -14,7 +14,13 @@
 //! no streak: where a second disc of it is found ([`disc::companion`]) the scene is also read
 //! as such (`read_creep`; the waiting disc is the one the incoming line meets at `2R`), its
 //! path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
-//! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined.
+//! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where
+//! no disc shows along the photo's mean ball colour (a dark ball on a light cloth), discs of
+//! every colour are read on their own colour, kept only with all three paths.
+//!
+//! Uncertainty: each angle's sigma is its calibrated fit sigma ([`calibrated_sd`]) and, without
+//! a plate, the unseen shift of the line of centres ([`frame_sigma`]); the line of centres'
+//! whole sigma, shared by all five angles, is `frame_err_deg`.
 
 use super::arc;
 use super::background::{self, Cloth, ClothModel, Signal};
@@ -847,7 +853,8 @@ fn psi_sigma(sd: f64, psi: f64, plate: bool) -> f64 {
 /// `0.0005 / cos psi` rad, 0.03° head-on and 0.2–0.4° at psi 82–86°. The same shift turns the
 /// line of centres `x̂ = (O - P)/2R` by as much (the incoming direction stays), and `delta1,
 /// delta2, theta1, theta2` are all read from `x̂`: each carries it too, with the same sign as
-/// psi (on seeds 101–505 clean the errors of `theta1` and psi correlate at 0.75, slope 0.9).
+/// psi (on seeds 101–505 clean the errors of `theta1` and psi correlate at 0.96, slope 0.91,
+/// `docs/error_correlation.py`).
 fn frame_sigma(psi: f64, plate: bool) -> f64 {
     if plate {
         0.0
