@@ -500,6 +500,26 @@ fn a_shared_error_of_all_five_angles_is_profiled_out() {
             with.notes
         );
         assert!(!without.notes.iter().any(|n| n.contains("frame_err_deg")));
+        // A shared part larger than an angle's whole error is bad input: that row is not used,
+        // and the reason names both columns.
+        if seed == 31 {
+            let mut bad = rows.clone();
+            for r in bad.iter_mut() {
+                r.frame_err_deg = Some(shared);
+            }
+            bad[0].frame_err_deg = Some(2.0 * stated);
+            let out = fit_materials(&bad, &opts).unwrap();
+            assert_eq!(out.fits[0].n_rejected, 1);
+            let why = out
+                .residuals
+                .iter()
+                .find_map(|r| r.rejected_reason.clone())
+                .unwrap();
+            assert!(
+                why.contains("frame_err_deg = ") && why.contains("exceeds psi_err_deg"),
+                "{why}"
+            );
+        }
         let ratio = without.e_se.unwrap() / with.e_se.unwrap();
         assert!(
             ratio > 4.0,

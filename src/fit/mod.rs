@@ -438,6 +438,25 @@ fn shot_data(i: usize, r: &ShotRow, opts: &FitOptions) -> std::result::Result<Sh
     if !(frame.is_finite() && frame >= 0.0) {
         return Err(format!("frame_err_deg = {frame} must be ≥ 0"));
     }
+    // The shared part of an angle's error cannot exceed the whole of it.
+    let stated = [("psi", r.psi_err_deg)].into_iter().chain(
+        crate::physics::ShotAngles::NAMES
+            .iter()
+            .zip(errs)
+            .zip(meas)
+            .filter(|(_, m)| m.is_some())
+            .map(|((n, e), _)| (*n, e)),
+    );
+    for (name, e) in stated {
+        if let Some(e) = e
+            && frame > e * (1.0 + 1e-9)
+        {
+            return Err(format!(
+                "frame_err_deg = {frame} exceeds {name}_err_deg = {e}: the part of the angles' \
+                 errors they share cannot be larger than an angle's whole error"
+            ));
+        }
+    }
     let own = |s: f64| {
         if frame > 0.0 {
             (s * s - frame * frame)
