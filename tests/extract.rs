@@ -76,6 +76,24 @@ fn abs_error(
     (v.expect("a measured value") - t[&r.file][key].parse::<f64>().unwrap()).abs()
 }
 
+/// Row `file` of a synthesised folder of 24 full-size photos (the folder's cloth texture needs
+/// all of them: a single photo reads differently), with the folder's truth; the folder is
+/// removed afterwards.
+fn one_of_24(
+    name: &str,
+    tier: &str,
+    seed: u64,
+    file: &str,
+) -> (ShotRow, HashMap<String, HashMap<String, String>>) {
+    let dir = scratch(name);
+    synth(&dir, tier, 24, seed, &["--size", "2400x1600"]);
+    let (_, rows) = extract_errors(&dir, 24, &[]);
+    let t = truth(&dir);
+    let _ = std::fs::remove_dir_all(&dir);
+    let shot = rows.into_iter().find(|r| r.file == file).unwrap();
+    (shot, t)
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -706,11 +724,8 @@ fn a_straight_cue_path_over_a_short_stretch_is_not_read() {
     // for only 0.9 R, 4.8 R from P. The joint fit takes it for a straight path from P, whose
     // direction the hidden sliding arc's offset tilts: theta1 read 1.4° off at a stated 0.06°
     // until session 19. Needs the folder's texture (a single photo is declined): 24 photos.
-    let dir = scratch("short_straight_cue");
-    synth(&dir, "clean", 24, 202, &["--size", "2400x1600"]);
-    let (_, rows) = extract_errors(&dir, 24, &[]);
-    let t = truth(&dir);
-    let shot = rows.iter().find(|r| r.file == "shot_024.png").unwrap();
+    let (shot, t) = one_of_24("short_straight_cue", "clean", 202, "shot_024.png");
+    let shot = &shot;
     assert_eq!(shot.status, Status::Ok, "{shot:#?}");
     assert!(shot.theta1_deg.is_none(), "{shot:#?}");
     assert!(
@@ -737,11 +752,8 @@ fn a_coloured_ball_resting_at_the_impact_point_is_seen() {
     // their roles swapped, psi 12° off at a stated 0.16°, theta2 24° off. Against the light of
     // the streak the reading calls its own (7.7 times it), it is a ball at rest, and a ball
     // resting at P at psi 19° is a misreading: declined. Needs the folder's texture: 24 photos.
-    let dir = scratch("coloured_rest_at_p");
-    synth(&dir, "realistic", 24, 404, &["--size", "2400x1600"]);
-    let (_, rows) = extract_errors(&dir, 24, &[]);
-    let _ = std::fs::remove_dir_all(&dir);
-    let shot = rows.iter().find(|r| r.file == "shot_019.jpg").unwrap();
+    let (shot, _) = one_of_24("coloured_rest_at_p", "realistic", 404, "shot_019.jpg");
+    let shot = &shot;
     assert_eq!(shot.status, Status::Declined, "{shot:#?}");
     assert!(
         shot.reason.contains("a ball rests at the impact point"),
@@ -756,12 +768,8 @@ fn a_rolling_line_over_a_short_stretch_states_a_wider_sigma() {
     // streak is clear of the others for only 1.7 R. Its rolling line, read as parabola+line,
     // was 2.6° off at a stated 0.66° (4 sigma); over stretches under 3 R such readings were 2.1
     // times their sigmas at the median, and the sigma now says so.
-    let dir = scratch("short_span_sigma");
-    synth(&dir, "realistic", 24, 505, &["--size", "2400x1600"]);
-    let (_, rows) = extract_errors(&dir, 24, &[]);
-    let t = truth(&dir);
-    let _ = std::fs::remove_dir_all(&dir);
-    let shot = rows.iter().find(|r| r.file == "shot_013.jpg").unwrap();
+    let (shot, t) = one_of_24("short_span_sigma", "realistic", 505, "shot_013.jpg");
+    let shot = &shot;
     assert_eq!(shot.status, Status::Ok, "{shot:#?}");
     let e = abs_error(&t, shot, shot.theta1_deg, "theta1_deg");
     let sd = shot.theta1_err_deg.unwrap();
@@ -778,12 +786,8 @@ fn a_dark_object_ball_is_found_in_its_own_colour() {
     // none ("5.7 σ above the cloth"). Searched in every colour and read on its own, with all
     // three paths found, it is read: psi 10.59° ± 0.51° (true 10.15°), theta2 1.09° ± 0.47°
     // (0.76°). Needs the folder's texture: 24 photos.
-    let dir = scratch("dark_object_ball");
-    synth(&dir, "hard", 24, 101, &["--size", "2400x1600"]);
-    let (_, rows) = extract_errors(&dir, 24, &[]);
-    let t = truth(&dir);
-    let _ = std::fs::remove_dir_all(&dir);
-    let shot = rows.iter().find(|r| r.file == "shot_022.jpg").unwrap();
+    let (shot, t) = one_of_24("dark_object_ball", "hard", 101, "shot_022.jpg");
+    let shot = &shot;
     assert_eq!(shot.status, Status::Ok, "{shot:#?}");
     for (v, sd, key) in [
         (shot.psi_deg, shot.psi_err_deg, "psi_deg"),

@@ -244,6 +244,26 @@ pub fn mad_sigma_about(v: &[f32], m: f32) -> f32 {
 
 const POLY_DEGREE: usize = 4;
 
+/// The coarse colour difference's three channels, each box-blurred with half-width `r` cells.
+pub fn smoothed_channels(sig: &Signal, r: usize) -> Vec<Vec<f32>> {
+    (0..3)
+        .map(|c| {
+            let v: Vec<f32> = sig.coarse_diff.iter().map(|d| d[c]).collect();
+            box_blur(&v, sig.cw, sig.ch, r)
+        })
+        .collect()
+}
+
+/// Mahalanobis norm `√(bᵀ C⁻¹ b)` of a colour difference `b` under the inverse covariance `ci`.
+#[inline]
+pub fn mahalanobis_norm(b: [f32; 3], ci: &[[f64; 3]; 3]) -> f32 {
+    let b = b.map(f64::from);
+    let q: f64 = (0..3)
+        .map(|i| (0..3).map(|j| b[i] * ci[i][j] * b[j]).sum::<f64>())
+        .sum();
+    q.max(0.0).sqrt() as f32
+}
+
 /// Robust colour covariance of residuals that are mostly cloth: start from the per-channel MAD,
 /// then four times keep the points within Mahalanobis distance² 11.34 (99 % of a 3-D Gaussian)
 /// of the median and take their covariance, divided by 0.9647 (the variance a Gaussian keeps

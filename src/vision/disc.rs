@@ -20,7 +20,7 @@
 //! ([`companion`]): each is then refined from its half facing away from the other
 //! ([`refine_excluding`]), whose rim is clear of the band the ball swept between them.
 
-use super::background::{Signal, box_blur, median, median_of};
+use super::background::{Signal, box_blur, mahalanobis_norm, median, median_of, smoothed_channels};
 use nalgebra::{Matrix3, Vector3};
 
 #[derive(Debug, Clone)]
@@ -128,21 +128,9 @@ pub fn find_candidates(sig: &Signal, k: usize) -> Result<Vec<CoarseDisc>, String
 /// cloth), whose light is negative along the photo's mean ball colour.
 pub fn find_colour_candidates(sig: &Signal, k: usize) -> Vec<(CoarseDisc, [f32; 3])> {
     let (w, h) = (sig.cw, sig.ch);
-    let chans: Vec<Vec<f32>> = (0..3)
-        .map(|c| {
-            let v: Vec<f32> = sig.coarse_diff.iter().map(|d| d[c]).collect();
-            box_blur(&v, w, h, 1)
-        })
-        .collect();
-    let ci = &sig.cov_inv;
+    let chans = smoothed_channels(sig, 1);
     let norm: Vec<f32> = (0..w * h)
-        .map(|i| {
-            let b = [0, 1, 2].map(|c| f64::from(chans[c][i]));
-            let q: f64 = (0..3)
-                .map(|a| (0..3).map(|c| b[a] * ci[a][c] * b[c]).sum::<f64>())
-                .sum();
-            q.max(0.0).sqrt() as f32
-        })
+        .map(|i| mahalanobis_norm([0, 1, 2].map(|c| chans[c][i]), &sig.cov_inv))
         .collect();
     let level = median_of(&norm);
     let noise = super::background::mad_sigma_about(&norm, level).max(1e-7);

@@ -12,7 +12,7 @@
 //! centre-line (sweep `∝ sqrt(R² - d²)`, shaded `∝ R² - d²`, blur) this is unbiased; its standard
 //! error is `σ_c² = Σ (t - c)² σ_n² / (Σ s)²` with `σ_n` the flank scatter.
 
-use super::background::{Signal, box_blur, mad_sigma, mad_sigma_about};
+use super::background::{Signal, mad_sigma, mad_sigma_about};
 
 #[derive(Debug, Clone)]
 pub struct CoarseStreak {
@@ -303,25 +303,14 @@ fn norm_map(sig: &Signal, rc: f64) -> (Vec<f32>, Vec<Vec<f32>>) {
     // red object ball can project to nothing on one direction; texture blotches, which change
     // the cloth's brightness more than its hue, are weighted down). Its cloth level is a
     // positive constant, removed by the ring's own median.
-    let chans: Vec<Vec<f32>> = (0..3)
-        .map(|c| {
-            let v: Vec<f32> = sig.coarse_diff.iter().map(|d| d[c]).collect();
-            box_blur(&v, w, h, rb)
-        })
-        .collect();
+    let chans = super::background::smoothed_channels(sig, rb);
     let blurred: Vec<[f32; 3]> = (0..w * h)
         .map(|i| [chans[0][i], chans[1][i], chans[2][i]])
         .collect();
     let ci = super::background::robust_cov_inv(&blurred);
     let s: Vec<f32> = blurred
         .iter()
-        .map(|b| {
-            let b = b.map(f64::from);
-            let q: f64 = (0..3)
-                .map(|i| (0..3).map(|j| b[i] * ci[i][j] * b[j]).sum::<f64>())
-                .sum();
-            q.max(0.0).sqrt() as f32
-        })
+        .map(|&b| super::background::mahalanobis_norm(b, &ci))
         .collect();
     (s, chans)
 }
