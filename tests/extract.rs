@@ -135,6 +135,11 @@ fn extract_errors(
         // A start tangent is only reported with its rolling line.
         assert!(r.theta1_deg.is_some() || r.delta1_deg.is_none(), "{r:?}");
         assert!(r.theta2_deg.is_some() || r.delta2_deg.is_none(), "{r:?}");
+        // A straight object-ball path does not measure its start tangent.
+        if r.path_model2.as_deref() == Some("line") {
+            assert!(r.delta2_deg.is_none(), "{r:?}");
+            assert!(r.reason.contains("delta2 not resolved ("), "{r:?}");
+        }
         let tr = &t[&r.file];
         for (name, v, sd) in [
             ("psi", r.psi_deg, r.psi_err_deg),
@@ -714,6 +719,20 @@ fn a_turn_hidden_at_a_rubber_impact_is_not_read() {
     );
     assert!(
         abs_error(&t, shot, shot.theta1_deg, "theta1_deg") < 0.2,
+        "{shot:#?}"
+    );
+    // The object ball's slide hides under its waiting disc (true delta2 2.64°, theta2 3.12°).
+    // Read with its folder (the cloth texture from all its photos) it states no delta2: in the
+    // demo's folder its path was a line from O, which until session 21 stated theta2's 3.10° as
+    // delta2 at 0.07°; here it is a parabola whose start the profile cannot pin. Its theta2 is
+    // measured.
+    let (_, rows) = extract_errors(&dir, 19, &[]);
+    let shot = rows.iter().find(|r| r.file == "shot_019.png").unwrap();
+    assert_eq!(shot.status, Status::Ok, "{shot:#?}");
+    assert!(shot.delta2_deg.is_none(), "{shot:#?}");
+    assert!(shot.reason.contains("delta2 not resolved ("), "{shot:#?}");
+    assert!(
+        abs_error(&t, shot, shot.theta2_deg, "theta2_deg") < 3.0 * shot.theta2_err_deg.unwrap(),
         "{shot:#?}"
     );
 }

@@ -398,9 +398,9 @@ fn shot_data(i: usize, r: &ShotRow, opts: &FitOptions) -> std::result::Result<Sh
     if !(0.0..90.0).contains(&psi) {
         return Err(format!("psi_deg = {psi} is outside [0, 90)"));
     }
-    // A straight-line path model reports delta = theta: the start tangent was not measured
-    // separately (the sliding arc was too short to see), so it carries no information of its
-    // own, and using it would count theta twice and impose delta = theta on the model.
+    // A straight-line path does not measure its start tangent (the sliding arc was too short
+    // to see): the extractor leaves it unresolved since session 21, and older tables state
+    // delta = theta there, which would count theta twice and impose delta = theta on the model.
     let line = |m: &Option<String>| m.as_deref() == Some("line");
     let meas = [
         r.delta1_deg.filter(|_| !line(&r.path_model1)),
