@@ -136,15 +136,17 @@ impl MaterialFigures {
     }
 
     /// Measured points `(x, y)` from a row, with errors propagated by `f` (value, error).
-    fn points(
-        &self,
-        label: &str,
-        marker: Marker,
-        f: impl Fn(&ShotRow) -> Option<DataPoint>,
-    ) -> Points {
-        let points = self.measured().filter_map(f).collect();
+    fn points(&self, marker: Marker, f: impl Fn(&ShotRow) -> Option<DataPoint>) -> Points {
+        let points: Vec<DataPoint> = self.measured().filter_map(f).collect();
+        // Not every shot measures every angle (an undefined or unresolved one has no point).
+        let (k, n) = (points.len(), self.n_measured());
+        let label = if k == n {
+            format!("measured ({n} shots)")
+        } else {
+            format!("measured ({k} of {n} shots)")
+        };
         Points {
-            label: Some(label.to_string()),
+            label: Some(label),
             points,
             color: material_color(&self.name),
             marker,
@@ -251,35 +253,31 @@ pub fn fig09(m: &MaterialFigures) -> Figure {
                     .with_samples(samples),
             );
         }
-        p.points.push(m.points(
-            &format!("measured ({} shots)", m.n_measured()),
-            marker,
-            |r| {
-                let (x, xe) = tan_err(r.psi_deg?, r.psi_err_deg);
-                let y_deg = if idx == DELTA1 {
-                    r.delta1_deg?
-                } else {
-                    r.theta1_deg?
-                };
-                let y_err = if idx == DELTA1 {
-                    r.delta1_err_deg
-                } else {
-                    r.theta1_err_deg
-                };
-                // Directions beyond 90° have negative tangents that belong to another branch:
-                // plot only points on the branch of the theory curves.
-                if y_deg.abs() >= 89.0 {
-                    return None;
-                }
-                let (y, ye) = tan_err(y_deg, y_err);
-                Some(DataPoint {
-                    x,
-                    y,
-                    x_err: xe,
-                    y_err: ye,
-                })
-            },
-        ));
+        p.points.push(m.points(marker, |r| {
+            let (x, xe) = tan_err(r.psi_deg?, r.psi_err_deg);
+            let y_deg = if idx == DELTA1 {
+                r.delta1_deg?
+            } else {
+                r.theta1_deg?
+            };
+            let y_err = if idx == DELTA1 {
+                r.delta1_err_deg
+            } else {
+                r.theta1_err_deg
+            };
+            // Directions beyond 90° have negative tangents that belong to another branch:
+            // plot only points on the branch of the theory curves.
+            if y_deg.abs() >= 89.0 {
+                return None;
+            }
+            let (y, ye) = tan_err(y_deg, y_err);
+            Some(DataPoint {
+                x,
+                y,
+                x_err: xe,
+                y_err: ye,
+            })
+        }));
         // tan of a direction near 90° runs off to infinity: size the axis by the data when
         // there is any, else by a generous multiple of tan psi.
         let data_hi = p
@@ -341,7 +339,6 @@ pub fn fig10(m: &MaterialFigures) -> Figure {
             );
         }
         p.points.push(m.points(
-            &format!("measured ({} shots)", m.n_measured()),
             if idx == DELTA1 {
                 Marker::Square
             } else {
@@ -481,9 +478,10 @@ pub fn fig11(m: &MaterialFigures) -> Figure {
         format!(
             "Fig. 11 style, {}: δ₂ against ψ ({}). Coloured: each regime forced over the whole \
              range with {who} (solid: gross slip at the ball–ball contact, dotted: slip–stick); \
-             black dashed: fitted coefficients in the regime the fit selected.",
+             black dashed: fitted coefficients in the regime the fit selected.{}",
             m.label,
-            m.spin_text()
+            m.spin_text(),
+            delta2_coverage(m)
         ),
         vec![p.ranges((0.0, 90.0), y_range)],
     )
@@ -491,17 +489,23 @@ pub fn fig11(m: &MaterialFigures) -> Figure {
 }
 
 fn delta2_points(m: &MaterialFigures) -> Points {
-    m.points(
-        &format!("measured ({} shots)", m.n_measured()),
-        Marker::Circle,
-        |r| {
-            Some(dp(
-                r.psi_deg?,
-                r.psi_err_deg,
-                r.delta2_deg?,
-                r.delta2_err_deg,
-            ))
-        },
+    m.points(Marker::Circle, |r| {
+        Some(dp(
+            r.psi_deg?,
+            r.psi_err_deg,
+            r.delta2_deg?,
+            r.delta2_err_deg,
+        ))
+    })
+}
+
+/// Why some shots (or all) have no `delta2` point, for the captions of Figs. 11 and 12.
+fn delta2_coverage(m: &MaterialFigures) -> String {
+    let k = m.measured().filter(|r| r.delta2_deg.is_some()).count();
+    format!(
+        " δ₂ is measured on {k} of the {} shots: the others' object-ball slide does not show (a \
+         path straight from the waiting disc, whose slide hides under it, has no δ₂).",
+        m.n_measured()
     )
 }
 
@@ -572,6 +576,14 @@ pub fn fig12(m: &MaterialFigures) -> Figure {
         });
         limit_text.push(format!("{label} {text}"));
     }
+    if m.measured().all(|r| r.delta2_deg.is_none()) {
+        p.notes.push(Note {
+            x: 2.0,
+            y: y1 - (0.03 + 0.06 * limits.len() as f64) * (y1 - y0),
+            text: "no shot measures δ₂ (its slide hides under the waiting disc)".into(),
+            color: BLACK,
+        });
+    }
     let limits = if limit_text.is_empty() {
         " No regime change for ψ in (0°, 90°): the curve is continuous.".to_string()
     } else {
@@ -582,8 +594,9 @@ pub fn fig12(m: &MaterialFigures) -> Figure {
         format!(
             "Figs. 12/13 style, {}: δ₂ against ψ with the regime chosen by the stick/slip \
              conditions (static friction μ0 decides where stick gives way to slip, so δ₂ jumps at \
-             ψ_L when μ0 ≠ μ), beside the gross-slip curve (dotted).{limits}",
-            m.label
+             ψ_L when μ0 ≠ μ), beside the gross-slip curve (dotted).{limits}{}",
+            m.label,
+            delta2_coverage(m)
         ),
         vec![p],
     )

@@ -817,7 +817,7 @@ fn slide_end_ratio(fit: &JointFit, ball: usize) -> Option<f64> {
 
 /// Why a straight path leaves its start tangent unresolved. Such a path states `delta = theta`,
 /// which the fit cannot use (it would count `theta` twice), and a slide short enough to hide
-/// turns the start unseen. On 29 synthetic sets and the demo (62 straight object-ball paths,
+/// turns the start unseen. On 23 synthetic sets and the demo (63 straight object-ball paths,
 /// 7 cue-ball ones) these values were off by the turn: billiard 0.1°, steel up to 0.9°, rubber
 /// 0.5–1.9° at 6–8 stated sigmas (the profile of `delta` in the richest model, which was
 /// meant to see the hidden turn, found a sharp valley on a degenerate arc).
