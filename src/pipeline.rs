@@ -1139,6 +1139,15 @@ pub fn summary_text(s: &RunSummary) -> String {
                 f.n_shots
             ));
         }
+        for f in &s.fits {
+            for n in f
+                .notes
+                .iter()
+                .filter(|n| n.starts_with(crate::fit::POOR_FIT_NOTE))
+            {
+                out.push_str(&format!("warning: {}: {n}\n", f.material));
+            }
+        }
     }
     out.push_str(&format!("\nreport: {}\n", s.report_index.display()));
     out

@@ -133,6 +133,9 @@ pub fn run(args: &FitArgs) -> CliResult {
     }
     for f in &out.fits {
         eprintln!("{}", summary_line(f));
+        for n in &f.notes {
+            eprintln!("  note: {n}");
+        }
     }
     Ok(Outcome::Ok)
 }
