@@ -375,6 +375,48 @@ fn head_on_stun_shots_stop_the_cue_ball() {
 /// The arc fit used to read `delta1` 30.3° at a stated 0.6°; now it is unresolved with the
 /// reason, while the same folder's other rolling shots keep theirs (measured 2026-11-24:
 /// `delta1` read on shots 1, 2, 3 and 5, 0.02–0.19° off).
+/// Realistic head-on stun shots: the cue ball rests against the object ball, and only the
+/// object ball's slowing down away from its disc tells the two resting balls apart. Where the
+/// two streaks' brightening does not differ by two standard errors in either reading, the row
+/// is declined with that reason (session 21: on this set those readings had `theta2` 0.98° off
+/// at a stated 0.14°, 0.39° at 0.16°, 0.35° at 0.11°); every reading kept is within 3 sigma.
+#[test]
+fn resting_balls_told_apart_only_by_a_clear_time_arrow() {
+    let dir = scratch("head_on_realistic");
+    synth(
+        &dir,
+        "realistic",
+        16,
+        43,
+        &["--psi", "0:1.5", "--spin=-0.05:0.05", "--size", "2400x1600"],
+    );
+    let (_, rows) = extract_errors(&dir, 16, &[]);
+    let t = truth(&dir);
+    let ok: Vec<&ShotRow> = rows.iter().filter(|r| r.status == Status::Ok).collect();
+    assert!(ok.len() >= 3, "ok {}/16: {rows:#?}", ok.len());
+    for r in &ok {
+        for (v, e, k) in [
+            (r.psi_deg, r.psi_err_deg, "psi_deg"),
+            (r.theta2_deg, r.theta2_err_deg, "theta2_deg"),
+        ] {
+            if v.is_some() {
+                let err = abs_error(&t, r, v, k);
+                assert!(err < 3.0 * e.unwrap(), "{k} {err:.2}° off: {r:#?}");
+            }
+        }
+    }
+    let undecided = rows
+        .iter()
+        .filter(|r| {
+            r.reason.starts_with(
+                "cannot tell which resting ball is the object ball (in neither reading does",
+            )
+        })
+        .count();
+    assert!(undecided >= 2, "{rows:#?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_hook_hidden_along_the_object_balls_streak_is_not_read() {
     let dir = scratch("hidden_hook");

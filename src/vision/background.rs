@@ -53,6 +53,10 @@ pub struct Signal<'a> {
     pub cloth_level: f32,
     /// Whether a background plate was subtracted (the cloth's texture is then gone too).
     pub plate: bool,
+    /// The cloth's brightness on the coarse grid (the mean of its three channels: the fitted
+    /// surface, or the plate's block means), which the lamp's irradiance scales as it scales a
+    /// ball's light ([`Signal::illumination`]).
+    pub cloth_brightness: Vec<f32>,
     /// The cloth model used.
     pub cloth: ClothModel,
 }
@@ -92,6 +96,22 @@ impl Signal<'_> {
         Some(a + fy * (b - a))
     }
 
+    /// The cloth's brightness at full-resolution point `(x, y)`, bilinear on the coarse grid
+    /// (clamped at its edges): proportional to the lamp's irradiance there, to the texture's
+    /// and the albedo's scale.
+    pub fn illumination(&self, x: f64, y: f64) -> f32 {
+        let f = self.f as f64;
+        let gx = (x / f - 0.5).clamp(0.0, (self.cw - 1) as f64);
+        let gy = (y / f - 0.5).clamp(0.0, (self.ch - 1) as f64);
+        let (x0, y0) = (gx.floor() as usize, gy.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(self.cw - 1), (y0 + 1).min(self.ch - 1));
+        let (fx, fy) = ((gx - x0 as f64) as f32, (gy - y0 as f64) as f32);
+        let b = |x: usize, y: usize| self.cloth_brightness[y * self.cw + x];
+        let top = b(x0, y0) + fx * (b(x1, y0) - b(x0, y0));
+        let bottom = b(x0, y1) + fx * (b(x1, y1) - b(x0, y1));
+        top + fy * (bottom - top)
+    }
+
     #[inline]
     pub fn coarse_at(&self, x: usize, y: usize) -> f32 {
         self.coarse[y * self.cw + x]
@@ -123,6 +143,7 @@ impl Signal<'_> {
             cov_inv: self.cov_inv,
             cloth_level: self.cloth_level,
             plate: self.plate,
+            cloth_brightness: self.cloth_brightness.clone(),
             cloth: self.cloth,
         }
     }
@@ -597,6 +618,12 @@ pub fn build<'a>(
     // blank where the object ball waits in most shots, and there, near the impact, the weights
     // must still turn away from the cloth's brightness blotches.
     let cov_inv = robust_cov_inv(plain.as_deref().unwrap_or(&diff));
+    // The smooth surface (or the plate), without the texture map's blotches.
+    let cloth_brightness: Vec<f32> = c_img
+        .iter()
+        .zip(plain.as_deref().unwrap_or(&diff))
+        .map(|(a, d)| (a[0] - d[0] + a[1] - d[1] + a[2] - d[2]) / 3.0)
+        .collect();
     let proj = projector(&cov_inv, u);
     let coarse: Vec<f32> = diff
         .iter()
@@ -632,6 +659,7 @@ pub fn build<'a>(
         cov_inv,
         cloth_level,
         plate: plate.is_some(),
+        cloth_brightness,
         cloth: model,
     })
 }
@@ -673,6 +701,39 @@ pub fn box_blur(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use proptest::prelude::*;
+
+    /// The cloth under a lamp that falls off by half across the photo (one ball-coloured blob so
+    /// that the signal has a colour): `illumination` follows the lamp to a percent, which is
+    /// what the time arrows divide the balls' light by.
+    #[test]
+    fn illumination_follows_the_lamp_across_the_cloth() {
+        let (w, h) = (800usize, 500usize);
+        let lamp = |x: f64| 1.0 - 0.5 * x / w as f64;
+        let mut data = vec![0f32; 3 * w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let blob = (x as f64 - 400.0).hypot(y as f64 - 250.0) < 30.0;
+                let c = if blob {
+                    [0.9, 0.9, 0.85]
+                } else {
+                    [0.1, 0.35, 0.2]
+                };
+                for k in 0..3 {
+                    data[3 * (y * w + x) + k] = (c[k] * lamp(x as f64)) as f32;
+                }
+            }
+        }
+        let img = super::RgbImage { w, h, data };
+        let sig = super::build(&img, super::Cloth::Surface, 400).unwrap();
+        for (xa, xb) in [(100.0, 700.0), (200.0, 600.0), (50.0, 350.0)] {
+            let got = sig.illumination(xa, 120.0) / sig.illumination(xb, 380.0);
+            let want = (lamp(xa) / lamp(xb)) as f32;
+            assert!(
+                (got / want - 1.0).abs() < 0.01,
+                "{xa}, {xb}: {got} against {want}"
+            );
+        }
+    }
 
     proptest! {
         /// The radix median is the comparison-based one to the bit, signed zeros, infinities

@@ -726,16 +726,21 @@ fn ring_samples(sig: &Signal, c: (f64, f64), rho: f64, n: usize) -> Vec<f32> {
 }
 
 /// Relative brightening per ball radius of a streak away from its start `s`, from its samples
-/// between 1.5 R and 6 R: `b / a` of the least-squares line `amp = a + b d / R`. The signal is
-/// the dwell time, so a ball slowing down brightens: an object ball leaves sliding (no spin)
-/// and loses 2/7 of its speed within a few radii (+2 to +4 % per R measured on clean synthetic
-/// head-on shots, the sliding part being averaged with rolling beyond it); a cue ball arriving
-/// rolls at nearly constant speed, or arrives sliding and so brightens towards `P` (about
-/// −0.7 % per R there).
-fn time_arrow(samples: &[Sample], s: (f64, f64), r: f64) -> Option<f64> {
+/// between 1.5 R and 6 R: `b / a` of the least-squares line `amp / L = a + b d / R`, with its
+/// standard error from the line's residuals. The signal is the dwell time, so a ball slowing
+/// down brightens: an object ball leaves sliding (no spin) and loses 2/7 of its speed within a
+/// few radii (+2 to +4 % per R measured on clean synthetic head-on shots, the sliding part being
+/// averaged with rolling beyond it); a cue ball arriving rolls at nearly constant speed, or
+/// arrives sliding and so brightens towards `P` (about −0.7 % per R there). `L` is the cloth's
+/// brightness at each sample ([`Signal::illumination`]): the lamp's irradiance scales a ball's
+/// light as it scales the cloth's, and its gradients and vignetting would tilt the line.
+fn time_arrow(sig: &Signal, samples: &[Sample], s: (f64, f64), r: f64) -> Option<(f64, f64)> {
     let pts: Vec<(f64, f64)> = samples
         .iter()
-        .map(|q| ((q.x - s.0).hypot(q.y - s.1) / r, q.amp))
+        .map(|q| {
+            let l = f64::from(sig.illumination(q.x, q.y)).max(1e-6);
+            ((q.x - s.0).hypot(q.y - s.1) / r, q.amp / l)
+        })
         .filter(|(d, _)| (1.5..=6.0).contains(d))
         .collect();
     if pts.len() < 5 {
@@ -748,10 +753,21 @@ fn time_arrow(samples: &[Sample], s: (f64, f64), r: f64) -> Option<f64> {
     let (sxx, sxy) = pts.iter().fold((0.0, 0.0), |acc, p| {
         (acc.0 + (p.0 - mx).powi(2), acc.1 + (p.0 - mx) * (p.1 - my))
     });
-    let b = sxy / sxx.max(1e-12);
+    let sxx = sxx.max(1e-12);
+    let b = sxy / sxx;
     let a = my - b * mx;
-    (a.abs() > 1e-12).then(|| b / a.abs())
+    let s2 = pts.iter().map(|p| (p.1 - a - b * p.0).powi(2)).sum::<f64>() / (n - 2.0);
+    (a.abs() > 1e-12).then(|| (b / a.abs(), (s2 / sxx).sqrt() / a.abs()))
 }
+
+/// How many standard errors apart the object ball's and the incoming streak's time arrows
+/// ([`time_arrow`]) must lie for a head-on shot's two resting balls to be told apart. Measured
+/// (session 21, head-on stun shots at psi 0–1.5°): 5–11 on a clean set with a plate (8 shots);
+/// on a realistic set (16) the readings below 2 were the worse ones (`theta2` 0.98° off at a
+/// stated 0.14°, 0.39° at 0.16°, 0.35° at 0.11°), those above 2 within 2.4 sigma; on hard sets
+/// every reading was below 1 (hard seed 101 shot_017 and two of seed 44: the roles swapped or
+/// `theta2` 0.8–1.6° off at stated 0.2–0.5°).
+const ARROW_SIGNIFICANCE: f64 = 2.0;
 
 /// Largest brightening per ball radius away from P ([`time_arrow`]) of a streak read as the
 /// incoming one. An arriving ball is faster the farther back it was, so its light fades away
@@ -1707,7 +1723,7 @@ fn read_body(
     // The incoming ball rolls towards P, faster the farther back it was: its light cannot grow
     // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
     // the incoming streak when the real one is too faint to find).
-    if let Some(arrow) = time_arrow(&measured[reading.inc], p_imp, r)
+    if let Some((arrow, _)) = time_arrow(sig, &measured[reading.inc], p_imp, r)
         && arrow > INCOMING_ARROW_MAX
     {
         out.reason = format!(
@@ -1722,18 +1738,27 @@ fn read_body(
     // the light alone is symmetric in time (a ball arrives and stops, the other leaves), except
     // that the object ball leaves sliding and so brightens away from its disc.
     if cue_at_rest {
-        let obj = time_arrow(&measured[reading.b2], o, r);
-        let inc = time_arrow(&measured[reading.inc], p_imp, r);
+        let obj = time_arrow(sig, &measured[reading.b2], o, r);
+        let inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
         if debug {
             eprintln!("time arrow: object {obj:?} incoming {inc:?}");
         }
-        if let (Some(obj), Some(inc)) = (obj, inc)
-            && obj < inc
+        // The object ball's brightening less the incoming one's, with its standard error: the
+        // reading stands when the object ball clearly slows down more; otherwise the other
+        // resting ball is tried as the object ball, and if that reading does not stand either,
+        // the roles cannot be told.
+        let arrows = obj.zip(inc).map(|(o, i)| (o.0 - i.0, o.1.hypot(i.1)));
+        if let Some((diff, se)) = arrows
+            && diff < ARROW_SIGNIFICANCE * se
         {
             if second_disc {
-                out.reason = "cannot tell which resting ball is the object ball (neither \
-                              reading has the object ball slowing down away from its disc)"
-                    .into();
+                out.reason = format!(
+                    "cannot tell which resting ball is the object ball (in neither reading does \
+                     the object ball clearly slow down away from its disc: here it brightens by \
+                     {:+.1} ± {:.1} % per R more than the incoming streak)",
+                    100.0 * diff,
+                    100.0 * se
+                );
                 return out;
             }
             let c = disc::CoarseDisc {
@@ -1748,10 +1773,13 @@ fn read_body(
                     read_from_disc(sig, d, opts, true)
                 }
                 _ => {
-                    out.reason = "the streak read as the object ball's does not slow down away \
-                                  from its disc, and no resting ball was found at the impact \
-                                  point to swap roles with"
-                        .into();
+                    out.reason = format!(
+                        "the streak read as the object ball's does not clearly slow down away \
+                         from its disc ({:+.1} ± {:.1} % per R more than the incoming one), and \
+                         no resting ball was found at the impact point to swap roles with",
+                        100.0 * diff,
+                        100.0 * se
+                    );
                     out
                 }
             };
