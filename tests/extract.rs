@@ -812,12 +812,17 @@ fn a_coloured_ball_resting_at_the_impact_point_is_seen() {
     // the white disc's contrast, below the 0.3 of a resting ball: the streaks were read with
     // their roles swapped, psi 12° off at a stated 0.16°, theta2 24° off. Against the light of
     // the streak the reading calls its own (7.7 times it), it is a ball at rest, and a ball
-    // resting at P at psi 19° is a misreading: declined. Needs the folder's texture: 24 photos.
+    // resting at P at psi 19° is a misreading: declined. Since session 21 the swapped reading
+    // is declined one step earlier, its time arrows telling neither ball from the other (−0.9 ±
+    // 1.9 % per R). Needs the folder's texture: 24 photos.
     let (shot, _) = one_of_24("coloured_rest_at_p", "realistic", 404, "shot_019.jpg");
     let shot = &shot;
     assert_eq!(shot.status, Status::Declined, "{shot:#?}");
     assert!(
-        shot.reason.contains("a ball rests at the impact point"),
+        shot.reason.contains("a ball rests at the impact point")
+            || shot
+                .reason
+                .starts_with("cannot tell which resting ball is the object ball"),
         "{shot:#?}"
     );
     assert!(shot.theta2_deg.is_none(), "{shot:#?}");
