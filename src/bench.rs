@@ -71,6 +71,11 @@ pub struct BenchRow {
     pub median_err_sd: f64,
     pub p90_err_deg: f64,
     pub ok_fraction: f64,
+    /// Share of the default setting's readings (every angle it measures, over the photos) that
+    /// this setting measures too: 1 for the default and for stages without angles. A setting
+    /// that drops a reading the score is too sparse to rate (the realistic set's few `delta1`
+    /// values without the arc fit) measures less, and cannot beat one that keeps it.
+    pub coverage: f64,
     pub n_items: usize,
     pub on_pareto_front: bool,
 }
@@ -191,6 +196,7 @@ pub fn mark_pareto(rows: &mut [BenchRow]) {
                 o.stage == r.stage
                     && o.median_err_deg.is_finite()
                     && o.ok_fraction >= r.ok_fraction
+                    && o.coverage >= r.coverage
                     && beats(o, r)
             });
     }
@@ -268,6 +274,7 @@ pub fn theory_rows(n: usize, seed: u64) -> Vec<BenchRow> {
             median_err_sd: 0.0,
             p90_err_deg: quantile(&e, 0.9),
             ok_fraction: 1.0,
+            coverage: 1.0,
             n_items: n,
             on_pareto_front: false,
         });
@@ -337,6 +344,7 @@ pub fn fit_rows(seed: u64) -> Result<Vec<BenchRow>> {
                 }),
                 p90_err_deg: quantile(&errs, 0.9),
                 ok_fraction: 1.0,
+                coverage: 1.0,
                 n_items: n,
                 on_pareto_front: false,
             });
@@ -499,6 +507,11 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             })
             .collect();
         let all: Vec<&AngleErrors> = per_image.iter().collect();
+        let (kept, of) = per_image
+            .iter()
+            .flatten()
+            .flatten()
+            .fold((0, 0), |(k, n), e| (k + usize::from(e.is_finite()), n + 1));
         // The same angles for every setting and every resample: those the default measures
         // often enough.
         let kinds = scored_angles(&all);
@@ -513,6 +526,11 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             }),
             p90_err_deg: angle_score(&all, &kinds, 0.9),
             ok_fraction: run.ok as f64 / images.len().max(1) as f64,
+            coverage: if of == 0 {
+                1.0
+            } else {
+                kept as f64 / of as f64
+            },
             n_items: images.len(),
             on_pareto_front: false,
         });
@@ -559,6 +577,10 @@ pub fn write_csv(rows: &[BenchRow], path: &Path) -> Result<()> {
                 rows.iter().map(|r| r.ok_fraction).collect::<Vec<_>>(),
             ),
             Column::new(
+                "coverage".into(),
+                rows.iter().map(|r| r.coverage).collect::<Vec<_>>(),
+            ),
+            Column::new(
                 "n_items".into(),
                 rows.iter().map(|r| r.n_items as u64).collect::<Vec<_>>(),
             ),
@@ -603,6 +625,8 @@ pub fn read_csv(path: &Path) -> Result<Vec<BenchRow>> {
     );
     // Written since session 11; older files have no sampling noise.
     let med_sd = f("median_err_sd_deg").unwrap_or_else(|_| vec![0.0; df.height()]);
+    // Written since session 21.
+    let coverage = f("coverage").unwrap_or_else(|_| vec![1.0; df.height()]);
     let (secs, med, p90, ok, n) = (
         f("seconds_per_item")?,
         f("median_err_deg")?,
@@ -620,6 +644,7 @@ pub fn read_csv(path: &Path) -> Result<Vec<BenchRow>> {
             median_err_sd: med_sd[i],
             p90_err_deg: p90[i],
             ok_fraction: ok[i],
+            coverage: coverage[i],
             n_items: n[i] as usize,
             on_pareto_front: front[i] == "true",
         })
@@ -804,12 +829,12 @@ pub fn run(args: &BenchArgs) -> CliResult {
         BenchKind::SpeedError(a) => {
             let rows = speed_error(a)?;
             println!(
-                "{:<8} {:<44} {:>3} {:>12} {:>10} {:>8} {:>10} {:>5} {:>6}",
-                "stage", "setting", "def", "s/item", "median", "± sd", "p90", "ok", "pareto"
+                "{:<8} {:<44} {:>3} {:>12} {:>10} {:>8} {:>10} {:>5} {:>5} {:>6}",
+                "stage", "setting", "def", "s/item", "median", "± sd", "p90", "ok", "cov", "pareto"
             );
             for r in &rows {
                 println!(
-                    "{:<8} {:<44} {:>3} {:>12.3e} {:>10.4} {:>8.4} {:>10.4} {:>5.2} {:>6}",
+                    "{:<8} {:<44} {:>3} {:>12.3e} {:>10.4} {:>8.4} {:>10.4} {:>5.2} {:>5.2} {:>6}",
                     r.stage,
                     r.setting,
                     if r.is_default { "*" } else { "" },
@@ -818,6 +843,7 @@ pub fn run(args: &BenchArgs) -> CliResult {
                     r.median_err_sd,
                     r.p90_err_deg,
                     r.ok_fraction,
+                    r.coverage,
                     if r.on_pareto_front { "yes" } else { "no" }
                 );
             }
@@ -855,6 +881,7 @@ mod tests {
             median_err_sd: 0.0,
             p90_err_deg: e,
             ok_fraction: 1.0,
+            coverage: 1.0,
             n_items: 1,
             on_pareto_front: false,
         }
@@ -877,6 +904,13 @@ mod tests {
         mark_pareto(&mut rows);
         let front: Vec<bool> = rows.iter().map(|r| r.on_pareto_front).collect();
         assert_eq!(front, [true, true, false, false, true, true, true]);
+        // As accurate as a row it would beat and twice as fast, but it lost some of the
+        // default's readings (an angle too sparse to score): it beats nobody.
+        let mut rows = vec![row("a", 1.0, 1.0), row("a", 0.5, 1.0)];
+        rows[1].coverage = 0.9;
+        mark_pareto(&mut rows);
+        let front: Vec<bool> = rows.iter().map(|r| r.on_pareto_front).collect();
+        assert_eq!(front, [true, true]);
     }
 
     #[test]
