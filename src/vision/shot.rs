@@ -9,14 +9,19 @@
 //! allows (`delta1 ∈ [-25°, 150°]`). Among physical assignments the one with the smallest
 //! `|theta2|` wins; if the runner-up is about as good, the photo is declined (cannot tell which
 //! ball is which). Two streaks only: the cue ball stopped at the impact if a stationary disc
-//! sits at `P` (then `delta1`, `theta1` are undefined), otherwise its streak is hidden and the
-//! photo is declined. At grazing incidence the object ball may creep a few radii and stop with
+//! sits at `P` (then `delta1`, `theta1` are undefined; which of the two touching resting balls
+//! is the object ball only the object ball's slowing down tells, [`time_arrow`], and a reading
+//! whose arrows do not differ by two standard errors is declined), otherwise its streak is
+//! hidden and the photo is declined. At grazing incidence the object ball may creep a few radii and stop with
 //! no streak: where a second disc of it is found ([`disc::companion`]) the scene is also read
 //! as such (`read_creep`; the waiting disc is the one the incoming line meets at `2R`), its
 //! path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
 //! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where
 //! no disc shows along the photo's mean ball colour (a dark ball on a light cloth), discs of
 //! every colour are read on their own colour, kept only with all three paths.
+//!
+//! A straight path (`line`) states no start tangent: its `delta` is unresolved with the reason
+//! (the cue ball's may still come from the arc fit of the light at `P`, [`arc`]).
 //!
 //! Uncertainty: each angle's sigma is its calibrated fit sigma ([`calibrated_sd`]) and, without
 //! a plate, the unseen shift of the line of centres ([`frame_sigma`]); the line of centres'
@@ -69,7 +74,8 @@ impl Default for AnalysisOptions {
 pub enum PathModels {
     /// A straight line or a sliding parabola tangent to the rolling line, by BIC.
     Auto,
-    /// Straight lines only: `delta = theta` (fast, biased where the sliding arc is visible).
+    /// Straight lines only (fast): no start tangent is measured, and `theta` is biased where a
+    /// sliding arc shows.
     LineOnly,
 }
 
