@@ -1276,7 +1276,7 @@ fn summarise(
     let prob = problem(shots, f.regimes.clone(), f.model, opts);
     let mut res_rows = Vec::new();
     let mut resid: [Vec<f64>; 5] = Default::default();
-    let (mut n_known, mut n_est, mut n_undet) = (0, 0, 0);
+    let (mut n_known, mut n_est, mut n_undet, mut n_assumed) = (0, 0, 0, 0);
     // Estimated spin: profile intervals and regime hypotheses per shot (independent, parallel).
     let ctx = spin::SpinContext {
         g,
@@ -1362,6 +1362,7 @@ fn summarise(
                 )
             } else {
                 n_known += 1;
+                n_assumed += usize::from(row.spin.is_none());
                 (
                     if row.spin.is_some() {
                         "known"
@@ -1414,10 +1415,6 @@ fn summarise(
     // A table without spin, fitted as rolling shots, that the model cannot reproduce: the
     // likeliest cause is spin the table does not state (follow, stun, draw, English), and the
     // coefficients are then wrong whatever their error bars say.
-    let n_assumed = shots
-        .iter()
-        .filter(|s| !s.estimate_spin && rows[s.row].spin.is_none())
-        .count();
     let n_total = shots.len() + rejected.len();
     if n_assumed > 0
         && (chi2_red > POOR_FIT_CHI2_REDUCED

@@ -481,7 +481,7 @@ pub fn fig11(m: &MaterialFigures) -> Figure {
              black dashed: fitted coefficients in the regime the fit selected.{}",
             m.label,
             m.spin_text(),
-            delta2_coverage(m)
+            delta2_coverage(m, n_delta2(m))
         ),
         vec![p.ranges((0.0, 90.0), y_range)],
     )
@@ -499,9 +499,13 @@ fn delta2_points(m: &MaterialFigures) -> Points {
     })
 }
 
+/// Shots with a `delta2` point.
+fn n_delta2(m: &MaterialFigures) -> usize {
+    m.measured().filter(|r| r.delta2_deg.is_some()).count()
+}
+
 /// Why some shots (or all) have no `delta2` point, for the captions of Figs. 11 and 12.
-fn delta2_coverage(m: &MaterialFigures) -> String {
-    let k = m.measured().filter(|r| r.delta2_deg.is_some()).count();
+fn delta2_coverage(m: &MaterialFigures, k: usize) -> String {
     format!(
         " δ₂ is measured on {k} of the {} shots: the others' object-ball slide does not show (a \
          path straight from the waiting disc, whose slide hides under it, has no δ₂).",
@@ -576,7 +580,8 @@ pub fn fig12(m: &MaterialFigures) -> Figure {
         });
         limit_text.push(format!("{label} {text}"));
     }
-    if m.measured().all(|r| r.delta2_deg.is_none()) {
+    let k = n_delta2(m);
+    if k == 0 {
         p.notes.push(Note {
             x: 2.0,
             y: y1 - (0.03 + 0.06 * limits.len() as f64) * (y1 - y0),
@@ -596,7 +601,7 @@ pub fn fig12(m: &MaterialFigures) -> Figure {
              conditions (static friction μ0 decides where stick gives way to slip, so δ₂ jumps at \
              ψ_L when μ0 ≠ μ), beside the gross-slip curve (dotted).{limits}{}",
             m.label,
-            delta2_coverage(m)
+            delta2_coverage(m, k)
         ),
         vec![p],
     )

@@ -39,8 +39,9 @@ pub struct Signal<'a> {
     pub ch: usize,
     /// Coarse background-subtracted signal `u·(C - B)`.
     pub coarse: Vec<f32>,
-    /// Coarse background-subtracted colour difference `C - B` per channel.
-    pub coarse_diff: Vec<[f32; 3]>,
+    /// Coarse background-subtracted colour difference `C - B` per channel (shared by the
+    /// photo's signals of other colours, [`Signal::recoloured`]).
+    pub coarse_diff: std::borrow::Cow<'a, [[f32; 3]]>,
     /// Robust (MAD) noise of `coarse`.
     pub sigma_coarse: f32,
     /// Unit ball-minus-cloth colour direction.
@@ -56,7 +57,7 @@ pub struct Signal<'a> {
     /// The cloth's brightness on the coarse grid (the mean of its three channels: the fitted
     /// surface, or the plate's block means), which the lamp's irradiance scales as it scales a
     /// ball's light ([`Signal::illumination`]).
-    pub cloth_brightness: Vec<f32>,
+    pub cloth_brightness: std::borrow::Cow<'a, [f32]>,
     /// The cloth model used.
     pub cloth: ClothModel,
 }
@@ -136,14 +137,14 @@ impl Signal<'_> {
             cw: self.cw,
             ch: self.ch,
             coarse,
-            coarse_diff: self.coarse_diff.clone(),
+            coarse_diff: std::borrow::Cow::Borrowed(&self.coarse_diff),
             sigma_coarse,
             u,
             proj,
             cov_inv: self.cov_inv,
             cloth_level: self.cloth_level,
             plate: self.plate,
-            cloth_brightness: self.cloth_brightness.clone(),
+            cloth_brightness: std::borrow::Cow::Borrowed(&self.cloth_brightness),
             cloth: self.cloth,
         }
     }
@@ -652,14 +653,14 @@ pub fn build<'a>(
         cw,
         ch,
         coarse,
-        coarse_diff: diff,
+        coarse_diff: diff.into(),
         sigma_coarse,
         u,
         proj,
         cov_inv,
         cloth_level,
         plate: plate.is_some(),
-        cloth_brightness,
+        cloth_brightness: cloth_brightness.into(),
         cloth: model,
     })
 }
