@@ -394,6 +394,9 @@ struct Pixels {
     index: Vec<u32>,
     /// Half-width (cells) of the high-pass box (see [`HIGHPASS_R`]).
     highpass: usize,
+    /// Evaluations of the outgoing path's dwell so far (each one pass over the cells), for the
+    /// debug log of the stages' costs ([`Laps`]).
+    evals: std::cell::Cell<usize>,
 }
 
 /// Start `(δ, L₀, L₁)` candidates: arcs from `P` onto the measured rolling line (offset `h`),
@@ -499,6 +502,7 @@ impl Pixels {
             stride,
             index: Vec::new(),
             highpass,
+            evals: std::cell::Cell::new(0),
         };
         for yy in (ya..=yb).step_by(stride) {
             for xx in (xa..=xb).step_by(stride) {
@@ -557,6 +561,7 @@ impl Pixels {
 
     /// Outgoing columns for the nonlinear parameters `x`.
     fn outgoing(&self, g: &ArcGeometry, x: &[f64; 3]) -> Vec<Dwell> {
+        self.evals.set(self.evals.get() + 1);
         let pieces = outgoing_pieces(g, x);
         let prepared: Vec<Prepared> = pieces
             .iter()
@@ -1174,6 +1179,41 @@ pub enum ArcMiss {
     Hidden(f64),
 }
 
+/// The cost of each stage of [`fit`], for `STREAKFIT_DEBUG`: the dwell evaluations (passes
+/// over the window's cells, the unit that sets the arc fit's time) and the wall time.
+struct Laps {
+    on: bool,
+    t: std::time::Instant,
+    log: Vec<String>,
+}
+
+impl Laps {
+    fn new(on: bool) -> Laps {
+        Laps {
+            on,
+            t: std::time::Instant::now(),
+            log: Vec::new(),
+        }
+    }
+
+    /// Closes the stage `name`, whose evaluations ran on `px`.
+    fn lap(&mut self, name: &str, px: &Pixels) {
+        if self.on {
+            let ms = self.t.elapsed().as_secs_f64() * 1e3;
+            let n = px.evals.replace(0);
+            self.log
+                .push(format!("{name} {n} × {} cells {ms:.1} ms", px.q.len()));
+            self.t = std::time::Instant::now();
+        }
+    }
+
+    fn print(&self) {
+        if self.on {
+            eprintln!("arc stages: {}", self.log.join("; "));
+        }
+    }
+}
+
 /// Fits the sliding arc to the pixels around the impact.
 ///
 /// Two stages keep it cheap: the starts are compared and refined on a grid of one pixel per
@@ -1192,6 +1232,7 @@ fn fit_with(
     allow_highpass: bool,
 ) -> Result<ArcFit, ArcMiss> {
     let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+    let mut laps = Laps::new(debug);
     let cands = starts(g);
     let coarse = Pixels::gather(sig, u, g, &cands, ((g.r / 20.0).round() as usize).max(2));
     if coarse.q.len() < 100 {
@@ -1207,7 +1248,9 @@ fn fit_with(
         }
     }
     let best = best.ok_or(ArcMiss::NoFit)?;
+    laps.lap("starts", &coarse);
     let (x, _) = levenberg_marquardt(&coarse, g, best.0, &all, 6).ok_or(ArcMiss::NoFit)?;
+    laps.lap("coarse LM", &coarse);
     let stride = ((g.r / 25.0).round() as usize).max(1);
     let px = Pixels::gather(sig, u, g, &[x], stride);
     if px.q.len() < 200 {
@@ -1221,10 +1264,12 @@ fn fit_with(
         15,
     )
     .ok_or(ArcMiss::NoFit)?;
+    laps.lap("fine LM", &px);
     let kept: Vec<f32> = res.iter().map(|r| *r as f32).collect();
     let s = (mad_sigma(&kept) as f64).max(1e-9);
     let mask = Mask::new(&px, res.iter().map(|r| r.abs() <= 4.0 * s).collect(), false);
     let (x, _) = levenberg_marquardt(&px, g, x, &mask, 15).ok_or(ArcMiss::NoFit)?;
+    laps.lap("outliers out", &px);
     let keep = &mask.keep;
     // An arc much shorter than the ball's radius: its start tangent is not in the light.
     visible(&x, g)?;
@@ -1237,12 +1282,14 @@ fn fit_with(
         res,
         n,
     } = statistics(&px, g, &x, &mask).ok_or(ArcMiss::NoFit)?;
+    laps.lap("statistics", &px);
     // The cost near the optimum is not the whole story: a short arc turning ±10° more, refitted
     // with its start tangent held, may fit nearly as well when the turn hides where the streaks
     // overlap (a short slide on a high-friction cloth). Then the start tangent is not measured,
     // whatever the curvature at the optimum says. (Starting the rivals from the optimum's own
     // legs as well flagged good arcs too: realistic shot_020, 0.08° off.)
     let rival = rival_cost(&px, g, &x, &mask, (c0, s2 * f), false);
+    laps.lap("rivals", &px);
     if debug {
         eprintln!("arc: an arc turning ±{RIVAL_TURN_DEG}° more costs Δχ² {rival:.1}");
     }
@@ -1262,6 +1309,9 @@ fn fit_with(
         .as_ref()
         .and_then(|fm| levenberg_marquardt(&px, g, x, fm, 15))
         .map(|(xf, _)| xf);
+    if refit.is_some() {
+        laps.lap("high-passed LM", &px);
+    }
     // On the filtered light the arc is hidden in the cue ball's footprint at `P`: the
     // unfiltered optimum (a longer arc that fits the blotches' and the brightness profile's
     // slow changes) does not measure the turn either.
@@ -1299,6 +1349,10 @@ fn fit_with(
         Some((xf, st.var, st.d_delta_d_theta, rival_f))
     });
     let highpass = filtered.is_some();
+    if highpass {
+        laps.lap("high-passed statistics and rival", &px);
+    }
+    laps.print();
     let rival = rival.min(filtered.map_or(f64::INFINITY, |f| f.3));
     let (x, var, systematic, slope) = match filtered {
         Some((xf, vf, sf, _)) => (xf, vf, SYSTEMATIC_DELTA_HIGHPASS_DEG, sf),

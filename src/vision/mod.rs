@@ -34,7 +34,8 @@
 //!
 //! Debug hooks (environment variables, read-only side effects): `STREAKFIT_DEBUG=1` prints, per
 //! photo (`== FILE`), the disc candidates and each one's reading, the streak candidates, the ray
-//! search, the fits, the start tangents' profiles and the arc fit's rival cost to stderr;
+//! search, the fits, the start tangents' profiles, the arc fit's rival cost and the cost of its
+//! stages (dwell evaluations, each one pass over the window's cells, and ms) to stderr;
 //! `STREAKFIT_COARSE_PNG=FILE` writes the coarse detection map (Mahalanobis norm, 0 to 3× its
 //! threshold); `STREAKFIT_TEXTURE_PNG=FILE` writes the folder's cloth texture map (grey 128 = 0);
 //! `STREAKFIT_ARC_DUMP=FILE` writes the arc fit's window (data and residual). Use them with one
