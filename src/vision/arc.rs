@@ -1206,8 +1206,11 @@ impl Laps {
             self.t = std::time::Instant::now();
         }
     }
+}
 
-    fn print(&self) {
+/// Printed when the fit ends, on every path out of it (a hidden arc returns early).
+impl Drop for Laps {
+    fn drop(&mut self) {
         if self.on {
             eprintln!("arc stages: {}", self.log.join("; "));
         }
@@ -1352,7 +1355,6 @@ fn fit_with(
     if highpass {
         laps.lap("high-passed statistics and rival", &px);
     }
-    laps.print();
     let rival = rival.min(filtered.map_or(f64::INFINITY, |f| f.3));
     let (x, var, systematic, slope) = match filtered {
         Some((xf, vf, sf, _)) => (xf, vf, SYSTEMATIC_DELTA_HIGHPASS_DEG, sf),
@@ -1654,6 +1656,7 @@ mod tests {
             stride: 2,
             index: Vec::new(),
             highpass: 1,
+            evals: Default::default(),
         };
         for cy in 0..gh {
             for cx in 0..gw {
