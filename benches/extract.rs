@@ -34,6 +34,8 @@ fn make(tier: Tier, name: &str) -> Vec<PathBuf> {
 }
 
 fn bench(c: &mut Criterion) {
+    // As the CLI runs.
+    streakfit::tune_allocator();
     let opts = AnalysisOptions::default();
     for (tier, name) in [
         (Tier::Clean, "clean_png"),

@@ -35,6 +35,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    streakfit::tune_allocator();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
