@@ -28,11 +28,11 @@ pub mod vision;
 /// photo (the arc fit's columns and residuals at each evaluation) and a decoded photo of about
 /// 46 MB per file. glibc serves blocks above its mmap threshold (128 kB to start) from fresh
 /// pages and trims the heap's top when it frees, so each one cost page faults and the kernel's
-/// zeroing: 10–20 % of a folder's time was system time on 2 cores (`extract --jobs 2`, 48
-/// photos: 2.1–3.1 s of system time in 11–12 s). With blocks up to 64 MB kept on the heap and
-/// trimming above 256 MB it was 0.8–1.5 s and the folder 5–10 % faster (session 22, four
-/// alternating runs; the same tables to the last digit). Other platforms keep their allocator's
-/// defaults. Call it once, before any work (the CLI and the benches do).
+/// zeroing: 13–22 % of a folder's time was system time on 2 cores (`extract --jobs 2`, 48
+/// photos: 1.4–2.5 s in 10.8–11.3 s). With blocks up to 64 MB kept on the heap and trimming
+/// above 256 MB it was 0.7–1.3 s in 10.0–10.2 s (session 22, three alternating runs; the same
+/// tables to the last digit). Other platforms keep their allocator's defaults. Call it once,
+/// before any work (the CLI and the extract bench do).
 pub fn tune_allocator() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: `mallopt` only sets two of the allocator's parameters; it is called before any
