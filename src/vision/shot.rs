@@ -1729,7 +1729,8 @@ fn read_body(
     // The incoming ball rolls towards P, faster the farther back it was: its light cannot grow
     // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
     // the incoming streak when the real one is too faint to find).
-    if let Some((arrow, _)) = time_arrow(sig, &measured[reading.inc], p_imp, r)
+    let inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
+    if let Some((arrow, _)) = inc
         && arrow > INCOMING_ARROW_MAX
     {
         out.reason = format!(
@@ -1745,7 +1746,6 @@ fn read_body(
     // that the object ball leaves sliding and so brightens away from its disc.
     if cue_at_rest {
         let obj = time_arrow(sig, &measured[reading.b2], o, r);
-        let inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
         if debug {
             eprintln!("time arrow: object {obj:?} incoming {inc:?}");
         }
