@@ -250,11 +250,22 @@ impl Prepared {
         }
         let mut acc = Integrals::default();
         let ha = (k.rmax2 - y2).sqrt();
+        // Where the piece spans the whole chord (the rolling line, beyond its start), the two
+        // ramps are mirror images: the same `∫ K`, `∫ K d²` and opposite `∫ K t`, to the last
+        // bit (every term of [`Integrals::ramp`] is even or odd in `t` operation by operation),
+        // so one is computed and added twice, in the order of two calls.
+        let whole = t0 <= -ha && t1 >= ha;
         if y2 < k.rmin2 {
             let hb = (k.rmin2 - y2).sqrt();
             acc.inner(t0.max(-hb), t1.min(hb), y2);
-            acc.ramp(t0.max(-ha), t1.min(-hb), y2, k);
-            acc.ramp(t0.max(hb), t1.min(ha), y2, k);
+            if whole {
+                acc.mirrored_ramps(hb, ha, y2, k);
+            } else {
+                acc.ramp(t0.max(-ha), t1.min(-hb), y2, k);
+                acc.ramp(t0.max(hb), t1.min(ha), y2, k);
+            }
+        } else if whole {
+            acc.mirrored_ramps(0.0, ha, y2, k);
         } else {
             // Beyond the inner radius the whole chord is ramp: split at the foot (one sign each).
             acc.ramp(t0.max(-ha), t1.min(0.0), y2, k);
@@ -321,6 +332,30 @@ impl Integrals {
         if v <= u {
             return;
         }
+        let (k0, k2, kt) = Integrals::ramp_parts(u, v, y2, k);
+        self.k0 += k0;
+        self.k2 += k2;
+        self.kt += kt;
+    }
+
+    /// `ramp(-b, -a)` then `ramp(a, b)` (`0 ≤ a < b`), with the second computed from the first.
+    #[inline]
+    fn mirrored_ramps(&mut self, a: f64, b: f64, y2: f64, k: &Kernel) {
+        if b <= a {
+            return;
+        }
+        let (k0, k2, kt) = Integrals::ramp_parts(-b, -a, y2, k);
+        self.k0 += k0;
+        self.k2 += k2;
+        self.kt += kt;
+        self.k0 += k0;
+        self.k2 += k2;
+        self.kt += -kt;
+    }
+
+    /// The three integrals of the ramp on `[u, v]`, `u < v` of one sign.
+    #[inline]
+    fn ramp_parts(u: f64, v: f64, y2: f64, k: &Kernel) -> (f64, f64, f64) {
         let (du, dv) = ((u * u + y2).sqrt(), (v * v + y2).sqrt());
         let log = y2_asinh_diff(u, v, du, dv, y2);
         // ∫ d = (t d + y² asinh(t/|y|))/2; ∫ d² = t³/3 + y² t;
@@ -331,9 +366,11 @@ impl Integrals {
             + 0.375 * y2 * log;
         let itd = (dv.powi(3) - du.powi(3)) / 3.0;
         let a = k.rmax;
-        self.k0 += (a * (v - u) - i1) * k.inv_w;
-        self.k2 += (a * i2 - i3) * k.inv_w;
-        self.kt += (a * it - itd) * k.inv_w;
+        (
+            (a * (v - u) - i1) * k.inv_w,
+            (a * i2 - i3) * k.inv_w,
+            (a * it - itd) * k.inv_w,
+        )
     }
 }
 
@@ -504,13 +541,34 @@ impl Pixels {
             highpass,
             evals: std::cell::Cell::new(0),
         };
+        // The window: grid positions within `margin` of a bounding polyline, each piece tested
+        // only on the positions of its own box (the same test, so the same cells in the same
+        // order, without testing every position against some hundred pieces).
+        let (gw, gh) = px.grid;
+        let mut near = vec![false; gw * gh];
+        let cols = |v0: f64, v1: f64, o: usize, n: usize| {
+            let lo = ((v0 - o as f64) / stride as f64).ceil().max(0.0) as usize;
+            let hi = (((v1 - o as f64) / stride as f64).floor() + 1.0).clamp(0.0, n as f64);
+            lo..(hi as usize).max(lo)
+        };
+        for (a, b) in &polys {
+            let xs = cols(a.0.min(b.0) - margin, a.0.max(b.0) + margin, xa, gw);
+            for cy in cols(a.1.min(b.1) - margin, a.1.max(b.1) + margin, ya, gh) {
+                let yy = (ya + cy * stride) as f64;
+                for cx in xs.clone() {
+                    let k = cy * gw + cx;
+                    if !near[k]
+                        && seg_dist2(((xa + cx * stride) as f64, yy), *a, *b) < margin * margin
+                    {
+                        near[k] = true;
+                    }
+                }
+            }
+        }
         for yy in (ya..=yb).step_by(stride) {
             for xx in (xa..=xb).step_by(stride) {
                 let q = (xx as f64, yy as f64);
-                if !polys
-                    .iter()
-                    .any(|(a, b)| seg_dist2(q, *a, *b) < margin * margin)
-                {
+                if !near[(yy - ya) / stride * gw + (xx - xa) / stride] {
                     continue;
                 }
                 // The object ball: its waiting disc (bright, shaded, with a highlight) and
@@ -537,8 +595,10 @@ impl Pixels {
         px
     }
 
-    /// The cells whose centres lie in the box `[x0, x1] × [y0, y1]` (px).
-    fn cells_in(&self, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> impl Iterator<Item = usize> {
+    /// Calls `f` on the cells whose centres lie in the box `[x0, x1] × [y0, y1]` (px), row by
+    /// row.
+    #[inline]
+    fn each_cell_in(&self, (x0, y0): (f64, f64), (x1, y1): (f64, f64), mut f: impl FnMut(usize)) {
         let (gw, gh) = self.grid;
         let (ox, oy, st) = (
             self.origin.0 as f64,
@@ -551,12 +611,17 @@ impl Pixels {
             ((v0 - o) / st).ceil() as usize..((((v1 - o) / st).floor() + 1.0) as usize).min(n)
         };
         let (xs, ys) = (range(x0, x1, ox, gw), range(y0, y1, oy, gh));
-        ys.flat_map(move |cy| {
-            xs.clone()
-                .map(move |cx| self.index[cy * gw + cx])
-                .filter(|&i| i != u32::MAX)
-                .map(|i| i as usize)
-        })
+        if xs.is_empty() {
+            return;
+        }
+        for cy in ys {
+            let row = &self.index[cy * gw..(cy + 1) * gw];
+            for &i in &row[xs.clone()] {
+                if i != u32::MAX {
+                    f(i as usize);
+                }
+            }
+        }
     }
 
     /// Outgoing columns for the nonlinear parameters `x`.
@@ -577,11 +642,11 @@ impl Pixels {
         for (piece, &(a, b, _)) in arc.iter().zip(&pieces) {
             let lo = (a.0.min(b.0) - reach, a.1.min(b.1) - reach);
             let hi = (a.0.max(b.0) + reach, a.1.max(b.1) + reach);
-            for i in self.cells_in(lo, hi) {
+            self.each_cell_in(lo, hi, |i| {
                 let f = piece.dwell(self.q[i], &self.kernel);
                 out[i].d0 += f.d0;
                 out[i].d2 += f.d2;
-            }
+            });
         }
         // Only the rolling line decelerates at a constant rate (the arc's own speed change is in
         // its shape): its ramp is the only one.

@@ -728,7 +728,7 @@ impl Template {
                 let s = (vk - pc.b0 - pc.b1 * tk) / pc.amp;
                 // Linear splatting into the two nearest bins.
                 let x = (uu + half) / h;
-                let i0 = x.floor() as usize;
+                let i0 = x as usize; // x ≥ 0: the floor
                 let f = x - i0 as f64;
                 if i0 < nb {
                     acc[i0] += (1.0 - f) * s;
@@ -774,7 +774,8 @@ impl Template {
         if q <= 0.0 || q >= (self.vals.len() - 1) as f64 {
             return (0.0, 0.0);
         }
-        let i = q.floor() as usize;
+        // q > 0: truncation is the floor (without `f64::floor`'s library call).
+        let i = q as usize;
         let f = q - i as f64;
         let v = self.vals[i] + f * (self.vals[i + 1] - self.vals[i]);
         // Derivative from a 1-px central difference of the interpolated shape (smooth enough for
