@@ -1604,6 +1604,65 @@ mod tests {
     /// chord starts inside the ramp, `√(ρ² - y²)`, is a few 1e-8), for pixels inside,
     /// on and beyond the edge, beside and beyond both ends, on the axis and off it.
     #[test]
+    fn mirrored_ramps_are_two_ramp_calls_to_the_last_bit() {
+        // The dwell as it was before the shortcut: both ramps integrated, always.
+        let two_calls = |piece: &Prepared, q: (f64, f64), k: &Kernel| -> (Integrals, f64) {
+            let (wx, wy) = (q.0 - piece.a.0, q.1 - piece.a.1);
+            let x = wx * piece.d.0 + wy * piece.d.1;
+            let y = piece.d.0 * wy - piece.d.1 * wx;
+            let (y2, t0, t1) = (y * y, -x, piece.len - x);
+            let mut acc = Integrals::default();
+            let ha = (k.rmax2 - y2).sqrt();
+            if y2 < k.rmin2 {
+                let hb = (k.rmin2 - y2).sqrt();
+                acc.inner(t0.max(-hb), t1.min(hb), y2);
+                acc.ramp(t0.max(-ha), t1.min(-hb), y2, k);
+                acc.ramp(t0.max(hb), t1.min(ha), y2, k);
+            } else {
+                acc.ramp(t0.max(-ha), t1.min(0.0), y2, k);
+                acc.ramp(t0.max(0.0), t1.min(ha), y2, k);
+            }
+            (acc, x)
+        };
+        let k = Kernel::for_cells(104.0, 4);
+        // A long straight piece (the rolling line) and pixels across it, inside and beyond the
+        // inner radius, at odd offsets so that no term is exact.
+        let piece = Prepared::new((10.3, -7.1), (1210.9, 403.2), 1.0);
+        let mut spanned = [0usize; 2];
+        for i in 0..400 {
+            let along = 150.0 + 2.37 * i as f64;
+            let across = -108.0 + 0.541 * i as f64;
+            let q = (
+                piece.a.0 + along * piece.d.0 - across * piece.d.1,
+                piece.a.1 + along * piece.d.1 + across * piece.d.0,
+            );
+            let ours = piece.dwell(q, &k);
+            let (theirs, x) = two_calls(&piece, q, &k);
+            if across.abs() >= k.rmax {
+                continue;
+            }
+            spanned[usize::from(across * across >= k.rmin2)] += 1;
+            let d = piece.dens;
+            assert_eq!(
+                ours.d0.to_bits(),
+                (d * theirs.k0).to_bits(),
+                "d0 at {across}"
+            );
+            assert_eq!(
+                ours.d2.to_bits(),
+                (d * theirs.k2 * k.inv_r2).to_bits(),
+                "d2 at {across}"
+            );
+            assert_eq!(
+                ours.ramp.to_bits(),
+                (d * (theirs.kt + x * theirs.k0) * k.inv_r).to_bits(),
+                "ramp at {across}"
+            );
+        }
+        assert!(spanned[0] > 100 && spanned[1] > 5, "{spanned:?}");
+    }
+
+    #[test]
     fn the_soft_edge_dwell_is_the_limit_of_many_hard_discs() {
         let k = Kernel::new(40.0, 2.3);
         let piece = Prepared::new((3.0, -2.0), (15.0, 7.0), 0.7);
