@@ -414,6 +414,15 @@ fn outgoing_pieces(g: &ArcGeometry, x: &[f64; 3]) -> Vec<Piece> {
     out
 }
 
+/// Grid positions `k < n` (at `o + k st`) within `[v0, v1]`: `ceil((v0 - o)/st) ..=
+/// floor((v1 - o)/st)`, clamped to the grid (the float-to-usize casts saturate negative values
+/// and NaN at 0), empty when the interval misses it.
+fn grid_range(v0: f64, v1: f64, o: f64, st: f64, n: usize) -> std::ops::Range<usize> {
+    let lo = ((v0 - o) / st).ceil() as usize;
+    let hi = ((((v1 - o) / st).floor() + 1.0) as usize).min(n);
+    lo..hi.max(lo)
+}
+
 /// The window's pixels with their fixed columns.
 struct Pixels {
     /// The kernel that models a cell mean at this sampling.
@@ -546,11 +555,8 @@ impl Pixels {
         // order, without testing every position against some hundred pieces).
         let (gw, gh) = px.grid;
         let mut near = vec![false; gw * gh];
-        let cols = |v0: f64, v1: f64, o: usize, n: usize| {
-            let lo = ((v0 - o as f64) / stride as f64).ceil().max(0.0) as usize;
-            let hi = (((v1 - o as f64) / stride as f64).floor() + 1.0).clamp(0.0, n as f64);
-            lo..(hi as usize).max(lo)
-        };
+        let cols =
+            |v0: f64, v1: f64, o: usize, n: usize| grid_range(v0, v1, o as f64, stride as f64, n);
         for (a, b) in &polys {
             let xs = cols(a.0.min(b.0) - margin, a.0.max(b.0) + margin, xa, gw);
             for cy in cols(a.1.min(b.1) - margin, a.1.max(b.1) + margin, ya, gh) {
@@ -605,12 +611,10 @@ impl Pixels {
             self.origin.1 as f64,
             self.stride as f64,
         );
-        // Grid columns (rows) `ceil((v0 - o)/st) ..= floor((v1 - o)/st)`, clamped to the grid;
-        // the float-to-usize casts saturate negative values at 0.
-        let range = |v0: f64, v1: f64, o: f64, n: usize| {
-            ((v0 - o) / st).ceil() as usize..((((v1 - o) / st).floor() + 1.0) as usize).min(n)
-        };
-        let (xs, ys) = (range(x0, x1, ox, gw), range(y0, y1, oy, gh));
+        let (xs, ys) = (
+            grid_range(x0, x1, ox, st, gw),
+            grid_range(y0, y1, oy, st, gh),
+        );
         if xs.is_empty() {
             return;
         }
@@ -1599,10 +1603,9 @@ mod tests {
         );
     }
 
-    /// The closed-form dwell is the limit of many hard discs of radii spread over the ramp: a
-    /// midpoint rule of 20,000 radii agrees to 1e-6 of the piece's length (its own error where a
-    /// chord starts inside the ramp, `√(ρ² - y²)`, is a few 1e-8), for pixels inside,
-    /// on and beyond the edge, beside and beyond both ends, on the axis and off it.
+    /// Where a piece spans a pixel's whole chord, the dwell computes one of its two
+    /// mirror-image ramps and uses it twice: the same bits as integrating both, for pixels
+    /// inside and beyond the inner radius of a long piece.
     #[test]
     fn mirrored_ramps_are_two_ramp_calls_to_the_last_bit() {
         // The dwell as it was before the shortcut: both ramps integrated, always.
@@ -1662,6 +1665,10 @@ mod tests {
         assert!(spanned[0] > 100 && spanned[1] > 5, "{spanned:?}");
     }
 
+    /// The closed-form dwell is the limit of many hard discs of radii spread over the ramp: a
+    /// midpoint rule of 20,000 radii agrees to 1e-6 of the piece's length (its own error where a
+    /// chord starts inside the ramp, `√(ρ² - y²)`, is a few 1e-8), for pixels inside,
+    /// on and beyond the edge, beside and beyond both ends, on the axis and off it.
     #[test]
     fn the_soft_edge_dwell_is_the_limit_of_many_hard_discs() {
         let k = Kernel::new(40.0, 2.3);
