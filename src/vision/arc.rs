@@ -320,9 +320,15 @@ impl Integrals {
             return;
         }
         let (i2, it) = polynomial_parts(u, v, y2);
-        self.k0 += v - u;
-        self.k2 += i2;
-        self.kt += it;
+        self.add((v - u, i2, it));
+    }
+
+    /// Adds one part's `(∫ K, ∫ K d², ∫ K t)`.
+    #[inline]
+    fn add(&mut self, (k0, k2, kt): (f64, f64, f64)) {
+        self.k0 += k0;
+        self.k2 += k2;
+        self.kt += kt;
     }
 
     /// `K = (R + w/2 - d)/w` on `[u, v]` (a part where `d` lies between the two radii, so
@@ -332,10 +338,7 @@ impl Integrals {
         if v <= u {
             return;
         }
-        let (k0, k2, kt) = Integrals::ramp_parts(u, v, y2, k);
-        self.k0 += k0;
-        self.k2 += k2;
-        self.kt += kt;
+        self.add(Integrals::ramp_parts(u, v, y2, k));
     }
 
     /// `ramp(-b, -a)` then `ramp(a, b)` (`0 ≤ a < b`), with the second computed from the first.
@@ -345,12 +348,8 @@ impl Integrals {
             return;
         }
         let (k0, k2, kt) = Integrals::ramp_parts(-b, -a, y2, k);
-        self.k0 += k0;
-        self.k2 += k2;
-        self.kt += kt;
-        self.k0 += k0;
-        self.k2 += k2;
-        self.kt += -kt;
+        self.add((k0, k2, kt));
+        self.add((k0, k2, -kt));
     }
 
     /// The three integrals of the ramp on `[u, v]`, `u < v` of one sign.
