@@ -12,11 +12,11 @@
 //! sits at `P` (then `delta1`, `theta1` are undefined; which of the two touching resting balls
 //! is the object ball only the object ball's slowing down tells, [`time_arrow`], and a reading
 //! whose arrows do not differ by two standard errors is declined), otherwise its streak is
-//! hidden and the photo is declined. At grazing incidence the object ball may creep a few radii and stop with
-//! no streak: where a second disc of it is found ([`disc::companion`]) the scene is also read
-//! as such (`read_creep`; the waiting disc is the one the incoming line meets at `2R`), its
-//! path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
-//! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where
+//! hidden and the photo is declined. At grazing incidence the object ball may creep a few radii
+//! and stop with no streak: where a second disc of it is found ([`disc::companion`]) the scene
+//! is also read as such (`read_creep`; the waiting disc is the one the incoming line meets at
+//! `2R`), its path is the line between the discs (`theta2` its direction, `delta2`
+//! unresolved), and the cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where
 //! no disc shows along the photo's mean ball colour (a dark ball on a light cloth), discs of
 //! every colour are read on their own colour, kept only with all three paths.
 //!
