@@ -1986,7 +1986,7 @@ fn read_body(
         // its start tangent comes from the pixels there (the centre-line fit gives the rest).
         let alpha = fit.alpha();
         let g1 = fit.geom1().expect("ball 1 has a path");
-        let geometry = arc::ArcGeometry {
+        let mut geometry = arc::ArcGeometry {
             p: fit.impact(),
             r: fit.r(),
             theta: alpha + fit.params[it],
@@ -1996,12 +1996,14 @@ fn read_body(
             object_dir: fit.geom2().u0,
             delta_guess: (id != it && fit.sd(id).is_finite()).then(|| alpha + fit.params[id]),
             theta_sd: calibrated_sd(fit.sd(it)),
+            max_end: None,
         };
         let cue_u = reading.b1.map_or(sig.u, |b| colours[b]);
         let t_arc = std::time::Instant::now();
         // The centre-line samples of the cue ball's streak lie on its rolling line (the joint
         // fit put them there): an arc that ends beyond the first of them contradicts them (at
-        // small psi a long shallow arc can rival the true short one in the pixels).
+        // small psi a long shallow arc can rival the true short one in the pixels), so the arc
+        // fit is bounded there (`ArcGeometry::max_end`).
         let u_th = (geometry.theta.cos(), geometry.theta.sin());
         let along = |q: (f64, f64)| (q.0 - geometry.p.0) * u_th.0 + (q.1 - geometry.p.1) * u_th.1;
         // The span of the clean centre-line samples along the rolling direction.
@@ -2015,6 +2017,7 @@ fn read_body(
             eprintln!("rolling line: clean span {:.2} R", span.unwrap_or(-1.0));
         }
         short_line = span.filter(|s| *s < MIN_ROLLING_SPAN_R);
+        geometry.max_end = first_sample.map(|f| f + 0.5 * geometry.r);
         let fitted =
             (opts.arc_pixels && opts.path_models == PathModels::Auto && short_line.is_none())
                 .then(|| arc::fit(sig, cue_u, &geometry));
@@ -2029,8 +2032,10 @@ fn read_body(
             out.delta1_err_deg = None;
             arc_hidden = Some(l0);
         }
-        let measured = fitted.and_then(Result::ok).filter(|a| {
-            let end = along(a.end);
+        if debug && let Some(Err(arc::ArcMiss::Beyond)) = fitted {
+            eprintln!("arc: the best arc ends on the first centre-line sample's bound");
+        }
+        let measured = fitted.and_then(Result::ok).inspect(|a| {
             if debug {
                 eprintln!(
                     "arc candidate: delta {:.3}° L0 {:.1} L1 {:.1}, end {:.1} px along \
@@ -2038,10 +2043,9 @@ fn read_body(
                     deg(m * wrap(a.delta - alpha)),
                     a.l0,
                     a.l1,
-                    end
+                    along(a.end)
                 );
             }
-            first_sample.is_none_or(|f| end <= f + 0.5 * geometry.r)
         });
         if let Some(a) = measured {
             if debug {
