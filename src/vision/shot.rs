@@ -184,6 +184,10 @@ pub struct Analysis {
     pub rest_disc: Option<Disc>,
     pub streaks: Vec<(Role, Vec<Sample>)>,
     pub fit: Option<JointFit>,
+    /// The cue ball's sliding arc fitted on the pixels at the impact (image geometry), when
+    /// `delta1` comes from it: the overlay draws this arc and its start tangent, not the joint
+    /// fit's (whose own start tangent is mostly unresolved there).
+    pub arc: Option<arc::ArcFit>,
     /// +1 or -1: the mirror applied so that psi ≥ 0.
     pub mirror: f64,
     /// The cloth model the signal was built with (None when the photo was declined before).
@@ -214,6 +218,7 @@ impl Analysis {
             rest_disc: None,
             streaks: Vec::new(),
             fit: None,
+            arc: None,
             mirror: 1.0,
             cloth: None,
         }
@@ -2092,6 +2097,7 @@ fn read_body(
                 out.delta1_deg = Some(deg(m * wrap(a.delta - alpha)));
                 out.delta1_err_deg = Some(deg(sd));
                 delta1_from_arc = true;
+                out.arc = Some(a);
             }
         }
         if short_line.is_some() {
@@ -2281,6 +2287,9 @@ fn read_body(
             }
             .into(),
         );
+    }
+    if out.delta1_deg.is_none() {
+        out.arc = None;
     }
     out.reason = notes.join("; ");
     out.fit = Some(fit);
