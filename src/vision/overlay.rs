@@ -138,41 +138,8 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
             lw,
             Rgb([0, 200, 255]),
         );
-        for (ball, g) in [(1, fit.geom1()), (2, Some(fit.geom2()))] {
-            let Some(g) = g else { continue };
-            let pts = g.polyline(len);
-            for w in pts.windows(2) {
-                thick_line(&mut out, w[0], w[1], lw, Rgb([0, 255, 0]));
-            }
-            // Start tangent, as long as 3 R: the pixel fit's sliding arc when `delta1` comes
-            // from it (drawn over the centre-line fit's path), else the path's own.
-            let (start, u0) = match (&a.arc, ball) {
-                (Some(arc), 1) => {
-                    let u = (arc.delta.cos(), arc.delta.sin());
-                    let c = (p.0 + arc.l0 * u.0, p.1 + arc.l0 * u.1);
-                    let bez = |t: f64| {
-                        let (b0, b1, b2) = ((1.0 - t) * (1.0 - t), 2.0 * t * (1.0 - t), t * t);
-                        (
-                            b0 * p.0 + b1 * c.0 + b2 * arc.end.0,
-                            b0 * p.1 + b1 * c.1 + b2 * arc.end.1,
-                        )
-                    };
-                    for k in 0..32 {
-                        let (t0, t1) = (k as f64 / 32.0, (k + 1) as f64 / 32.0);
-                        thick_line(&mut out, bez(t0), bez(t1), 1.5 * lw, Rgb([255, 170, 0]));
-                    }
-                    (p, u)
-                }
-                _ => (g.start, g.u0),
-            };
-            arrow(
-                &mut out,
-                start,
-                (start.0 + 3.0 * r * u0.0, start.1 + 3.0 * r * u0.1),
-                lw,
-                Rgb([255, 255, 0]),
-            );
-        }
+        // The frame first, so that the paths and start tangents (along `y` for many shots) stay
+        // visible on top of it.
         let x = (fit.alpha().cos(), fit.alpha().sin());
         let y = (-a.mirror * x.1, a.mirror * x.0);
         arrow(
@@ -208,6 +175,41 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
             &font,
             "y",
         );
+        for (ball, g) in [(1, fit.geom1()), (2, Some(fit.geom2()))] {
+            let Some(g) = g else { continue };
+            let pts = g.polyline(len);
+            for w in pts.windows(2) {
+                thick_line(&mut out, w[0], w[1], lw, Rgb([0, 255, 0]));
+            }
+            // Start tangent, as long as 3 R: the pixel fit's sliding arc when `delta1` comes
+            // from it (drawn over the centre-line fit's path), else the path's own.
+            let (start, u0) = match (&a.arc, ball) {
+                (Some(arc), 1) => {
+                    let u = (arc.delta.cos(), arc.delta.sin());
+                    let c = (p.0 + arc.l0 * u.0, p.1 + arc.l0 * u.1);
+                    let bez = |t: f64| {
+                        let (b0, b1, b2) = ((1.0 - t) * (1.0 - t), 2.0 * t * (1.0 - t), t * t);
+                        (
+                            b0 * p.0 + b1 * c.0 + b2 * arc.end.0,
+                            b0 * p.1 + b1 * c.1 + b2 * arc.end.1,
+                        )
+                    };
+                    for k in 0..32 {
+                        let (t0, t1) = (k as f64 / 32.0, (k + 1) as f64 / 32.0);
+                        thick_line(&mut out, bez(t0), bez(t1), 1.5 * lw, Rgb([255, 170, 0]));
+                    }
+                    (p, u)
+                }
+                _ => (g.start, g.u0),
+            };
+            arrow(
+                &mut out,
+                start,
+                (start.0 + 3.0 * r * u0.0, start.1 + 3.0 * r * u0.1),
+                lw,
+                Rgb([255, 255, 0]),
+            );
+        }
         let _ = o;
     }
     let fs = (side / 35.0) as f32;
@@ -235,7 +237,7 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
             fmt_angle("delta1", a.delta1_deg, a.delta1_err_deg, &a.reason),
             a.path_model1.as_deref().unwrap_or("stopped"),
             if a.arc.is_some() {
-                "; start tangent from the arc fit on the pixels, orange"
+                "; delta1 from the arc fit at P, orange"
             } else {
                 ""
             }
