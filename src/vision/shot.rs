@@ -1991,26 +1991,13 @@ fn read_body(
         // its start tangent comes from the pixels there (the centre-line fit gives the rest).
         let alpha = fit.alpha();
         let g1 = fit.geom1().expect("ball 1 has a path");
-        let mut geometry = arc::ArcGeometry {
-            p: fit.impact(),
-            r: fit.r(),
-            theta: alpha + fit.params[it],
-            line_point: g1.end,
-            incoming: ((alpha + fit.psi_s()).cos(), (alpha + fit.psi_s()).sin()),
-            o: fit.o(),
-            object_dir: fit.geom2().u0,
-            delta_guess: (id != it && fit.sd(id).is_finite()).then(|| alpha + fit.params[id]),
-            theta_sd: calibrated_sd(fit.sd(it)),
-            max_end: None,
-        };
-        let cue_u = reading.b1.map_or(sig.u, |b| colours[b]);
-        let t_arc = std::time::Instant::now();
+        let (p_imp, theta) = (fit.impact(), alpha + fit.params[it]);
         // The centre-line samples of the cue ball's streak lie on its rolling line (the joint
         // fit put them there): an arc that ends beyond the first of them contradicts them (at
         // small psi a long shallow arc can rival the true short one in the pixels), so the arc
         // fit is bounded there (`ArcGeometry::max_end`).
-        let u_th = (geometry.theta.cos(), geometry.theta.sin());
-        let along = |q: (f64, f64)| (q.0 - geometry.p.0) * u_th.0 + (q.1 - geometry.p.1) * u_th.1;
+        let u_th = (theta.cos(), theta.sin());
+        let along = |q: (f64, f64)| (q.0 - p_imp.0) * u_th.0 + (q.1 - p_imp.1) * u_th.1;
         // The span of the clean centre-line samples along the rolling direction.
         let samples = pb.out1.as_ref().and_then(|v| {
             let a = v.iter().map(|q| along((q.x, q.y)));
@@ -2022,7 +2009,20 @@ fn read_body(
             eprintln!("rolling line: clean span {:.2} R", span.unwrap_or(-1.0));
         }
         short_line = span.filter(|s| *s < MIN_ROLLING_SPAN_R);
-        geometry.max_end = first_sample.map(|f| f + 0.5 * geometry.r);
+        let geometry = arc::ArcGeometry {
+            p: p_imp,
+            r: fit.r(),
+            theta,
+            line_point: g1.end,
+            incoming: ((alpha + fit.psi_s()).cos(), (alpha + fit.psi_s()).sin()),
+            o: fit.o(),
+            object_dir: fit.geom2().u0,
+            delta_guess: (id != it && fit.sd(id).is_finite()).then(|| alpha + fit.params[id]),
+            theta_sd: calibrated_sd(fit.sd(it)),
+            max_end: first_sample.map(|f| f + 0.5 * fit.r()),
+        };
+        let cue_u = reading.b1.map_or(sig.u, |b| colours[b]);
+        let t_arc = std::time::Instant::now();
         let fitted =
             (opts.arc_pixels && opts.path_models == PathModels::Auto && short_line.is_none())
                 .then(|| arc::fit(sig, cue_u, &geometry));
