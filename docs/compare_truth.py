@@ -10,11 +10,47 @@ rows misread: an angle more than 5 stated sigma and more than 1 degree off. Wher
 the angles as the camera shows them (`*_image_deg`, since session 15), "camera" is the median
 |image - table| over the same rows: the part of the error a perfect measurement in the image
 would still make without knowing the camera's tilt and distortion. "radius" is the median
-signed error of the fitted ball radius in px.
+signed error of the fitted ball radius in px. Where DIR also holds psi_bound.csv (`streakfit
+bench psi-bound` with the synth flags of DIR, since session 25), "bound" compares psi with its
+Cramér–Rao bound: the median |error| that a reader at the bound would have on every shot of
+the set and on the `ok` rows, and the medians over the `ok` rows of |error| / bound and stated
+sigma / bound (how many times the best possible sigma the extractor's errors and sigmas are).
 """
 import csv
+import math
 import statistics
 import sys
+
+
+def efficient_median(sigmas):
+    """The m with mean_i P(|N(0, sigma_i^2)| <= m) = 1/2 (src/synth/bound.rs)."""
+    lo, hi = 0.0, 10.0 * max(sigmas)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        share = sum(math.erf(mid / (s * math.sqrt(2.0))) for s in sigmas) / len(sigmas)
+        lo, hi = (mid, hi) if share < 0.5 else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def bound_line(folder, truth, ok):
+    try:
+        rows = list(csv.DictReader(open(f"{folder}/psi_bound.csv")))
+    except FileNotFoundError:
+        return None
+    bound = {r["file"]: float(r["sigma_psi_bound_deg"]) for r in rows if r["sigma_psi_bound_deg"]}
+    if not bound:
+        return None
+    ok_b = [r for r in ok if r["file"] in bound and r["psi_deg"] != ""]
+    line = f"  bound   at the bound: all {len(bound)} shots {efficient_median(list(bound.values())):.4f}"
+    if ok_b:
+        errs = [angle_error(float(r["psi_deg"]), float(truth[r["file"]]["psi_deg"])) / bound[r["file"]]
+                for r in ok_b]
+        sds = [float(r["psi_err_deg"]) / bound[r["file"]] for r in ok_b if r["psi_err_deg"]]
+        line += (f", the {len(ok_b)} ok rows {efficient_median([bound[r['file']] for r in ok_b]):.4f}"
+                 f"; ok rows: |error|/bound {statistics.median(errs):.1f}")
+        if sds:
+            line += f", sigma/bound {statistics.median(sds):.1f}"
+    return line
 
 
 def angle_error(a, b):
@@ -53,6 +89,9 @@ def report(folder, table):
           for r in ok if r.get("ball_radius_px")]
     if dr:
         print(f"  radius  n {len(dr):3d}  median signed error {statistics.median(dr):+.3f} px")
+    line = bound_line(folder, truth, ok)
+    if line:
+        print(line)
     misread = []
     for r in ok:
         worst = None

@@ -1,4 +1,5 @@
-//! `streakfit bench speed-error`: what each unit of speed costs in accuracy.
+//! `streakfit bench speed-error`: what each unit of speed costs in accuracy; `streakfit bench
+//! psi-bound`: the best accuracy of `psi` that synthetic photos allow ([`crate::synth::bound`]).
 //!
 //! On a pinned (seeded) synthetic set with ground truth, every cost knob of a stage is swept and
 //! each setting's seconds per item and angle errors are recorded:
@@ -34,6 +35,9 @@ pub struct BenchArgs {
 pub enum BenchKind {
     /// Sweep the cost knobs of extraction, theory and fit; write speed_error.csv and a Pareto plot.
     SpeedError(SpeedErrorArgs),
+    /// The Cramér–Rao bound of psi for the photos that `synth` writes with the same flags:
+    /// OUT/psi_bound.csv and a summary (no photo is written).
+    PsiBound(crate::synth::SynthArgs),
 }
 
 #[derive(Debug, Args, Clone)]
@@ -824,8 +828,66 @@ pub fn speed_error(args: &SpeedErrorArgs) -> Result<Vec<BenchRow>, CliError> {
     Ok(rows)
 }
 
+/// `bench psi-bound`: the bound of every planned shot ([`crate::synth::bound`]), written to
+/// `OUT/psi_bound.csv` (`file, material, psi_deg, sigma_psi_bound_deg, sigma_d_bound_px,
+/// incoming_px`) with a summary on standard output.
+pub fn psi_bound(args: &crate::synth::SynthArgs) -> CliResult {
+    use crate::synth::bound;
+    let folder = crate::synth::plan_for(args).map_err(CliError::usage)?;
+    let base = folder.backdrop.base_plate();
+    let bounds: Vec<Option<bound::PsiBound>> = folder
+        .shots
+        .iter()
+        .map(|p| bound::psi_bound(p, &folder.backdrop, &base))
+        .collect();
+    let mut csv =
+        String::from("file,material,psi_deg,sigma_psi_bound_deg,sigma_d_bound_px,incoming_px\n");
+    for (p, b) in folder.shots.iter().zip(&bounds) {
+        let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));
+        csv.push_str(&format!(
+            "{},{},{:.6},{},{},{}\n",
+            p.file,
+            p.material_name,
+            p.shot.psi.to_degrees(),
+            cell(b.map(|b| b.sigma_psi_deg)),
+            cell(b.map(|b| b.sigma_d_px)),
+            cell(b.map(|b| b.incoming_px)),
+        ));
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let file = args.out.join("psi_bound.csv");
+    crate::io::write_atomic(&file, csv.as_bytes())?;
+    let sigmas: Vec<f64> = bounds.iter().flatten().map(|b| b.sigma_psi_deg).collect();
+    let mut sorted = sigmas.clone();
+    sorted.sort_by(f64::total_cmp);
+    let quantile = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
+    println!(
+        "{} {} shots (seed {}): psi's Cramér–Rao bound for {} with an incoming streak in the image",
+        folder.shots.len(),
+        folder.tier.name(),
+        args.seed,
+        sigmas.len()
+    );
+    if !sorted.is_empty() {
+        println!(
+            "  sigma_psi bound: median {:.4}°, 10–90 % {:.4}–{:.4}°; above 1.5°: {}",
+            quantile(0.5),
+            quantile(0.1),
+            quantile(0.9),
+            sorted.iter().filter(|s| **s > 1.5).count()
+        );
+        if let Some(m) = bound::efficient_median(&sigmas) {
+            println!("  median |error| of a reader at the bound on every shot: {m:.4}°");
+        }
+    }
+    println!("wrote {}", file.display());
+    Ok(Outcome::Ok)
+}
+
 pub fn run(args: &BenchArgs) -> CliResult {
     match &args.kind {
+        BenchKind::PsiBound(a) => psi_bound(a),
         BenchKind::SpeedError(a) => {
             let rows = speed_error(a)?;
             println!(

@@ -30,7 +30,8 @@ enum Command {
     Report(streakfit::report::cli::ReportArgs),
     /// Fit material coefficients (e, mu, mu', mu0) with uncertainties and model selection.
     Fit(streakfit::fit::FitArgs),
-    /// Benchmarks: `bench speed-error` sweeps each stage's cost knobs against ground truth.
+    /// Benchmarks: `bench speed-error` sweeps each stage's cost knobs against ground truth;
+    /// `bench psi-bound` gives psi's Cramér–Rao bound for synthetic photos.
     Bench(streakfit::bench::BenchArgs),
 }
 

@@ -25,6 +25,7 @@
 //! shot draws everything else from its own stream, and each image band has its own noise stream,
 //! so output is byte-identical for a seed whatever the thread count.
 
+pub mod bound;
 pub mod camera;
 pub mod materials;
 pub mod render;
@@ -694,6 +695,22 @@ fn outgoing_pieces(path: &BallPath, t_end: f64) -> Vec<(f64, f64)> {
 
 /// The image-space frame (segments and discs) of a planned shot.
 pub fn build_frame(p: &ShotPlan) -> Frame {
+    build_frame_parts(p).0
+}
+
+/// Which pieces of a [`Frame`] belong to which path: the object ball's waiting disc is
+/// `discs[0]`; a ball that stops within the exposure has a resting disc too.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FrameParts {
+    pub incoming: std::ops::Range<usize>,
+    pub cue_out: std::ops::Range<usize>,
+    pub object_out: std::ops::Range<usize>,
+    pub cue_rest: Option<usize>,
+    pub object_rest: Option<usize>,
+}
+
+/// [`build_frame`] and its [`FrameParts`].
+pub fn build_frame_parts(p: &ShotPlan) -> (Frame, FrameParts) {
     let (m, _) = motion(p);
     let cam = &p.camera;
     let mut frame = Frame::default();
@@ -707,6 +724,10 @@ pub fn build_frame(p: &ShotPlan) -> Frame {
         p.exposure_s,
         p.cue_rgb,
     );
+    let mut parts = FrameParts {
+        incoming: 0..frame.segments.len(),
+        ..FrameParts::default()
+    };
     // The object ball waits, touching the cue ball's position at impact, until t = 0.
     frame.discs.push(rest_disc(
         p,
@@ -715,7 +736,11 @@ pub fn build_frame(p: &ShotPlan) -> Frame {
         -m.t0,
         p.object_rgb,
     ));
-    for (path, rgb) in [(m.cue_out, p.cue_rgb), (m.object, p.object_rgb)] {
+    for (ball, (path, rgb)) in [(m.cue_out, p.cue_rgb), (m.object, p.object_rgb)]
+        .into_iter()
+        .enumerate()
+    {
+        let first = frame.segments.len();
         for piece in outgoing_pieces(&path, m.t1) {
             push_segments(
                 &mut frame.segments,
@@ -727,11 +752,18 @@ pub fn build_frame(p: &ShotPlan) -> Frame {
                 rgb,
             );
         }
-        if path.t_stop < m.t1 {
+        let pieces = first..frame.segments.len();
+        let rest = (path.t_stop < m.t1).then(|| {
             let at = path.position(path.t_stop);
             frame
                 .discs
                 .push(rest_disc(p, &m, at, m.t1 - path.t_stop.max(0.0), rgb));
+            frame.discs.len() - 1
+        });
+        if ball == 0 {
+            (parts.cue_out, parts.cue_rest) = (pieces, rest);
+        } else {
+            (parts.object_out, parts.object_rest) = (pieces, rest);
         }
     }
     if let Some(s) = p.stray {
@@ -746,7 +778,7 @@ pub fn build_frame(p: &ShotPlan) -> Frame {
             s.rgb,
         );
     }
-    frame
+    (frame, parts)
 }
 
 /// Pixel positions on the centre line of the incoming cue-ball streak, from the start of the

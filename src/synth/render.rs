@@ -365,12 +365,19 @@ fn disc_pixel(d: &Disc, dx: f64, dy: f64, light: [f64; 3]) -> (f32, f32, f32) {
 
 /// Accumulated ball light at one pixel: total covered fraction and Σ f_k b_k.
 #[derive(Debug, Clone, Copy, Default)]
-struct Acc {
-    alpha: f32,
-    rgb: [f32; 3],
+pub(super) struct Acc {
+    pub(super) alpha: f32,
+    pub(super) rgb: [f32; 3],
 }
 
-fn accumulate_band(frame: &Frame, bd: &Backdrop, y0: usize, rows: usize, acc: &mut [Acc]) {
+/// Adds the ball light of `frame` over rows `y0 .. y0 + rows` (all columns) into `acc`.
+pub(super) fn accumulate_band(
+    frame: &Frame,
+    bd: &Backdrop,
+    y0: usize,
+    rows: usize,
+    acc: &mut [Acc],
+) {
     let w = bd.width as usize;
     let (by0, by1) = (y0 as f64, (y0 + rows) as f64);
     let light = bd.light_unit();
@@ -429,7 +436,7 @@ fn accumulate_band(frame: &Frame, bd: &Backdrop, y0: usize, rows: usize, acc: &m
 /// Expected (noise-free) value of one pixel from the lit cloth `base` and its accumulated ball
 /// light.
 #[inline]
-fn compose(bd: &Backdrop, base: &[f32], x: u32, y: u32, a: &Acc) -> [f64; 3] {
+pub(super) fn compose(bd: &Backdrop, base: &[f32], x: u32, y: u32, a: &Acc) -> [f64; 3] {
     if a.alpha <= 0.0 {
         return [base[0] as f64, base[1] as f64, base[2] as f64];
     }
