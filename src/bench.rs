@@ -37,7 +37,18 @@ pub enum BenchKind {
     SpeedError(SpeedErrorArgs),
     /// The Cramér–Rao bound of psi for the photos that `synth` writes with the same flags:
     /// OUT/psi_bound.csv and a summary (no photo is written).
-    PsiBound(crate::synth::SynthArgs),
+    PsiBound(PsiBoundArgs),
+}
+
+#[derive(Debug, Args, Clone)]
+pub struct PsiBoundArgs {
+    #[command(flatten)]
+    pub synth: crate::synth::SynthArgs,
+    /// Leave out the pixels within this many ball radii of the impact point (but for the
+    /// waiting disc's): the bound of a reading that cannot use the streaks' light where they
+    /// overlap there.
+    #[arg(long, default_value_t = 0.0)]
+    pub blind_r: f64,
 }
 
 #[derive(Debug, Args, Clone)]
@@ -831,14 +842,21 @@ pub fn speed_error(args: &SpeedErrorArgs) -> Result<Vec<BenchRow>, CliError> {
 /// `bench psi-bound`: the bound of every planned shot ([`crate::synth::bound`]), written to
 /// `OUT/psi_bound.csv` (`file, material, psi_deg, sigma_psi_bound_deg, sigma_d_bound_px,
 /// incoming_px`) with a summary on standard output.
-pub fn psi_bound(args: &crate::synth::SynthArgs) -> CliResult {
+pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
     use crate::synth::bound;
+    let args = &a.synth;
+    if !(a.blind_r >= 0.0 && a.blind_r.is_finite()) {
+        return Err(CliError::usage(format!(
+            "--blind-r: expected a number of ball radii ≥ 0, got {}",
+            a.blind_r
+        )));
+    }
     let folder = crate::synth::plan_for(args).map_err(CliError::usage)?;
     let base = folder.backdrop.base_plate();
     let bounds: Vec<Option<bound::PsiBound>> = folder
         .shots
         .iter()
-        .map(|p| bound::psi_bound(p, &folder.backdrop, &base))
+        .map(|p| bound::psi_bound(p, &folder.backdrop, &base, a.blind_r))
         .collect();
     let mut csv =
         String::from("file,material,psi_deg,sigma_psi_bound_deg,sigma_d_bound_px,incoming_px\n");
@@ -863,11 +881,16 @@ pub fn psi_bound(args: &crate::synth::SynthArgs) -> CliResult {
     sorted.sort_by(f64::total_cmp);
     let quantile = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
     println!(
-        "{} {} shots (seed {}): psi's Cramér–Rao bound for {} with an incoming streak in the image",
+        "{} {} shots (seed {}): psi's Cramér–Rao bound for {} with an incoming streak in the image{}",
         folder.shots.len(),
         folder.tier.name(),
         args.seed,
-        sigmas.len()
+        sigmas.len(),
+        if a.blind_r > 0.0 {
+            format!(", pixels within {} R of the impact left out", a.blind_r)
+        } else {
+            String::new()
+        }
     );
     if !sorted.is_empty() {
         println!(

@@ -421,7 +421,7 @@ fn psi_bound_follows_the_tiers_signal_to_noise() {
             .shots
             .iter()
             .map(|p| {
-                let b = synth::bound::psi_bound(p, &folder.backdrop, &base).expect("a bound");
+                let b = synth::bound::psi_bound(p, &folder.backdrop, &base, 0.0).expect("a bound");
                 assert!(b.sigma_psi_deg.is_finite() && b.sigma_psi_deg > 0.0);
                 assert!(b.incoming_px > 0.0);
                 b.sigma_psi_deg
@@ -429,7 +429,11 @@ fn psi_bound_follows_the_tiers_signal_to_noise() {
             .collect();
         s.sort_by(f64::total_cmp);
         // The CLI writes the same numbers, one row per shot.
-        streakfit::bench::psi_bound(&args).unwrap();
+        let cli = streakfit::bench::PsiBoundArgs {
+            synth: args.clone(),
+            blind_r: 0.0,
+        };
+        streakfit::bench::psi_bound(&cli).unwrap();
         let csv = std::fs::read_to_string(args.out.join("psi_bound.csv")).unwrap();
         assert_eq!(csv.lines().count(), 5, "{csv}");
         assert!(csv.contains(&format!("{:.6}", s[0])), "{csv}");

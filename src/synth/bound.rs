@@ -50,16 +50,25 @@ pub struct PsiBound {
 }
 
 /// The Cramér–Rao bound of `psi` for shot `p` on the table `bd` (`base` is its
-/// [`Backdrop::base_plate`]). `None` when no part of the incoming streak is in the image or the
-/// information matrix is singular.
-pub fn psi_bound(p: &ShotPlan, bd: &Backdrop, base: &[f32]) -> Option<PsiBound> {
+/// [`Backdrop::base_plate`]), from the waiting disc and every pixel farther than `blind_r` ball
+/// radii from the impact point `P` (0: every pixel; a reading that cannot use the streaks' light
+/// where they overlap near `P` has at best the bound with that part left out). `None` when no part of the incoming
+/// streak is in the image or the information matrix is singular.
+pub fn psi_bound(p: &ShotPlan, bd: &Backdrop, base: &[f32], blind_r: f64) -> Option<PsiBound> {
     let (frame, parts) = build_frame_parts(p);
-    frame_bound(&frame, &parts, bd, base)
+    frame_bound(&frame, &parts, bd, base, blind_r)
 }
 
 /// The bound for a frame and its parts (the incoming streak ends at the impact).
-fn frame_bound(frame: &Frame, parts: &FrameParts, bd: &Backdrop, base: &[f32]) -> Option<PsiBound> {
-    let geo = Geometry::of(frame, parts)?;
+fn frame_bound(
+    frame: &Frame,
+    parts: &FrameParts,
+    bd: &Backdrop,
+    base: &[f32],
+    blind_r: f64,
+) -> Option<PsiBound> {
+    let mut geo = Geometry::of(frame, parts)?;
+    geo.blind = blind_r * frame.discs[0].r;
     let f = fisher(frame, &geo, bd, base)?;
     let cov = f.try_inverse()?;
     let var_d = (geo.g.transpose() * cov * &geo.g)[(0, 0)];
@@ -108,6 +117,11 @@ struct Geometry {
     g: DVector<f64>,
     /// Rows the parameters' pieces touch.
     y_range: (f64, f64),
+    /// `P`, and the radius around it whose pixels are left out (px), but for the waiting
+    /// disc's (centre and radius plus a pixel).
+    pt: [f64; 2],
+    blind: f64,
+    o: (f64, f64, f64),
 }
 
 impl Geometry {
@@ -217,6 +231,9 @@ impl Geometry {
             op2: ox * ox + oy * oy,
             g,
             y_range: (lo, hi),
+            pt,
+            blind: 0.0,
+            o: (o[0], o[1], frame.discs[0].r + 1.0),
         })
     }
 
@@ -284,6 +301,14 @@ fn band_jacobian(
                 return None;
             }
             let (x, y) = (i % w, y0 + i / w);
+            let (dx, dy) = (x as f64 + 0.5 - geo.pt[0], y as f64 + 0.5 - geo.pt[1]);
+            if dx * dx + dy * dy < geo.blind * geo.blind {
+                // The waiting disc's own pixels stay: the reading measures it apart.
+                let (ex, ey) = (x as f64 + 0.5 - geo.o.0, y as f64 + 0.5 - geo.o.1);
+                if ex * ex + ey * ey > geo.o.2 * geo.o.2 {
+                    return None;
+                }
+            }
             let b3 = &base[(y * w + x) * 3..(y * w + x) * 3 + 3];
             let mu = render::compose(bd, b3, x as u32, y as u32, &full[i]);
             let l = bd.illumination(x as f64 + 0.5, y as f64 + 0.5);
@@ -562,7 +587,7 @@ mod tests {
         );
         assert!(mean.abs() < 4.0 * (var / n).sqrt(), "mean read {mean}");
         // And the whole bound: sigma_psi from sigma_d and |OP| = 2R at psi = 30°.
-        let b = frame_bound(&frame, &parts, &bd, &base).unwrap();
+        let b = frame_bound(&frame, &parts, &bd, &base, 0.0).unwrap();
         let expect = (b.sigma_d_px / (24.0 * 30f64.to_radians().cos())).to_degrees();
         assert!((b.sigma_psi_deg - expect).abs() < 1e-6 * expect);
         assert!(
@@ -570,6 +595,18 @@ mod tests {
             "nuisances cannot add information"
         );
         assert!((b.incoming_px - 120.118).abs() < 0.001, "{}", b.incoming_px);
+        // Leaving out the streak's light near P can only lose information: the bound grows
+        // with the blind radius, and beyond the streak's visible length (10 R here) only the
+        // streak's pixels inside the disc's remain, which hardly place the line.
+        let blind = |k: f64| frame_bound(&frame, &parts, &bd, &base, k).map(|b| b.sigma_psi_deg);
+        let (s2, s4) = (blind(2.0).unwrap(), blind(4.0).unwrap());
+        assert!(
+            b.sigma_psi_deg < s2 && s2 < s4,
+            "{} {s2} {s4}",
+            b.sigma_psi_deg
+        );
+        let s12 = blind(12.0);
+        assert!(s12.is_none_or(|s| s > 10.0 * s4), "{s12:?}");
     }
 
     #[test]
