@@ -624,6 +624,37 @@ pub fn tick_label(v: f64, span: f64) -> String {
     }
 }
 
+/// The part `[t0, t1]` of the segment `a + t (b − a)`, `t ∈ [0, 1]`, inside the window
+/// `[x0, x1] × [y0, y1]` (Liang–Barsky), `None` where it misses it.
+pub fn clip_interval(
+    a: (f64, f64),
+    b: (f64, f64),
+    ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64)),
+) -> Option<(f64, f64)> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+    for (p, q) in [
+        (-dx, a.0 - x0),
+        (dx, x1 - a.0),
+        (-dy, a.1 - y0),
+        (dy, y1 - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    (t0 <= t1).then_some((t0, t1))
+}
+
 /// Clips a polyline to the window `[x0, x1] × [y0, y1]` (Liang–Barsky per segment) and returns
 /// the visible runs; a curve that leaves and re-enters the window becomes two runs.
 fn clip_pieces(seg: &[(f64, f64)], win: ((f64, f64), (f64, f64))) -> Vec<Vec<(f64, f64)>> {
@@ -637,34 +668,12 @@ fn clip_pieces(seg: &[(f64, f64)], win: ((f64, f64), (f64, f64))) -> Vec<Vec<(f6
     for w in seg.windows(2) {
         let (a, b) = (w[0], w[1]);
         let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-        let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
-        let mut visible = true;
-        for (p, q) in [
-            (-dx, a.0 - x0),
-            (dx, x1 - a.0),
-            (-dy, a.1 - y0),
-            (dy, y1 - a.1),
-        ] {
-            if p == 0.0 {
-                if q < 0.0 {
-                    visible = false;
-                    break;
-                }
-            } else {
-                let r = q / p;
-                if p < 0.0 {
-                    t0 = t0.max(r);
-                } else {
-                    t1 = t1.min(r);
-                }
-            }
-        }
-        if !visible || t0 > t1 {
+        let Some((t0, t1)) = clip_interval(a, b, win) else {
             if !cur.is_empty() {
                 out.push(std::mem::take(&mut cur));
             }
             continue;
-        }
+        };
         let pa = (a.0 + t0 * dx, a.1 + t0 * dy);
         let pb = (a.0 + t1 * dx, a.1 + t1 * dy);
         if cur.is_empty() {

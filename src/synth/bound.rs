@@ -193,23 +193,19 @@ impl Geometry {
         ];
         // Nuisances: the directions of both outgoing paths, which the reading cannot assume
         // (they are what the photos measure). A path without pieces in the frame has none.
-        if !cue_out.is_empty() {
-            params.push(Param {
-                step: H_SHIFT / reach(&cue_out, pt),
-                segments: cue_out,
-                discs: rest(parts.cue_rest),
-                motion: Motion::Turn(pt),
-                g: 0.0,
-            });
-        }
-        if !obj_out.is_empty() {
-            params.push(Param {
-                step: H_SHIFT / reach(&obj_out, o),
-                segments: obj_out,
-                discs: rest(parts.object_rest),
-                motion: Motion::Turn(o),
-                g: 0.0,
-            });
+        for (segments, rest_disc, pivot) in [
+            (cue_out, parts.cue_rest, pt),
+            (obj_out, parts.object_rest, o),
+        ] {
+            if !segments.is_empty() {
+                params.push(Param {
+                    step: H_SHIFT / reach(&segments, pivot),
+                    segments,
+                    discs: rest(rest_disc),
+                    motion: Motion::Turn(pivot),
+                    g: 0.0,
+                });
+            }
         }
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for prm in &params {
@@ -368,29 +364,11 @@ fn fisher(frame: &Frame, geo: &Geometry, bd: &Backdrop, base: &[f32]) -> Option<
     Some(f)
 }
 
-/// Length of segment `a → b` inside `[0, w] × [0, h]` (Liang–Barsky clipping).
+/// Length of segment `a → b` inside `[0, w] × [0, h]`.
 fn clipped_length(a: [f64; 2], b: [f64; 2], w: f64, h: f64) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [(-dx, a[0]), (dx, w - a[0]), (-dy, a[1]), (dy, h - a[1])] {
-        if p == 0.0 {
-            if q < 0.0 {
-                return 0.0;
-            }
-        } else {
-            let r = q / p;
-            if p < 0.0 {
-                t0 = t0.max(r);
-            } else {
-                t1 = t1.min(r);
-            }
-        }
-    }
-    if t1 > t0 {
-        (t1 - t0) * dx.hypot(dy)
-    } else {
-        0.0
-    }
+    let (a, b) = ((a[0], a[1]), (b[0], b[1]));
+    crate::report::plot::clip_interval(a, b, ((0.0, w), (0.0, h)))
+        .map_or(0.0, |(t0, t1)| (t1 - t0) * (b.0 - a.0).hypot(b.1 - a.1))
 }
 
 /// The median |error| over a set of shots that a reader attaining each shot's bound `σ_i`
