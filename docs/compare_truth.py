@@ -37,7 +37,8 @@ def bound_line(folder, truth, ok):
         rows = list(csv.DictReader(open(f"{folder}/psi_bound.csv")))
     except FileNotFoundError:
         return None
-    bound = {r["file"]: float(r["sigma_psi_bound_deg"]) for r in rows if r["sigma_psi_bound_deg"]}
+    bound = {r["file"]: float(r["sigma_psi_bound_deg"]) for r in rows
+             if r["sigma_psi_bound_deg"] and float(r.get("blind_r", "0") or 0) == 0.0}
     if not bound:
         return None
     ok_b = [r for r in ok if r["file"] in bound and r["psi_deg"] != ""]

@@ -46,9 +46,13 @@ pub struct PsiBoundArgs {
     pub synth: crate::synth::SynthArgs,
     /// Leave out the pixels within this many ball radii of the impact point (but for the
     /// waiting disc's): the bound of a reading that cannot use the streaks' light where they
-    /// overlap there.
-    #[arg(long, default_value_t = 0.0)]
-    pub blind_r: f64,
+    /// overlap there. A comma-separated list gives one bound per radius and a figure.
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub blind_r: Vec<f64>,
+    /// The extraction table of these photos (`streakfit extract DIR --out FILE`): its psi
+    /// errors are compared with the bounds and drawn in the figure.
+    #[arg(long)]
+    pub table: Option<PathBuf>,
 }
 
 #[derive(Debug, Args, Clone)]
@@ -839,73 +843,192 @@ pub fn speed_error(args: &SpeedErrorArgs) -> Result<Vec<BenchRow>, CliError> {
     Ok(rows)
 }
 
-/// `bench psi-bound`: the bound of every planned shot ([`crate::synth::bound`]), written to
-/// `OUT/psi_bound.csv` (`file, material, psi_deg, sigma_psi_bound_deg, sigma_d_bound_px,
-/// incoming_px`) with a summary on standard output.
+/// `bench psi-bound`: the bound of every planned shot ([`crate::synth::bound`]) at each blind
+/// radius, written to `OUT/psi_bound.csv` (`file, material, psi_deg, blind_r,
+/// sigma_psi_bound_deg, sigma_d_bound_px, incoming_px`), with a summary on standard output and,
+/// for several radii, the figure `OUT/psi_bound.png|svg`: the median |error| of a reader at the
+/// bound against the blind radius, and the extractor's with `--table`.
 pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
     use crate::synth::bound;
     let args = &a.synth;
-    if !(a.blind_r >= 0.0 && a.blind_r.is_finite()) {
+    if let Some(k) = a.blind_r.iter().find(|k| !(k.is_finite() && **k >= 0.0)) {
         return Err(CliError::usage(format!(
-            "--blind-r: expected a number of ball radii ≥ 0, got {}",
-            a.blind_r
+            "--blind-r: expected numbers of ball radii ≥ 0, got {k}"
         )));
     }
     let folder = crate::synth::plan_for(args).map_err(CliError::usage)?;
+    // The extractor's psi error per file, where its row is `ok` and has psi.
+    let measured: Option<std::collections::HashMap<String, f64>> = match &a.table {
+        None => None,
+        Some(t) => {
+            let rows = crate::table::read_angle_table(t)
+                .map_err(|e| CliError::usage(format!("--table: {e:#}")))?;
+            let truth: std::collections::HashMap<&str, f64> = folder
+                .shots
+                .iter()
+                .map(|p| (p.file.as_str(), p.shot.psi.to_degrees()))
+                .collect();
+            Some(
+                rows.iter()
+                    .filter(|r| r.status == crate::table::Status::Ok)
+                    .filter_map(|r| {
+                        let t = truth.get(r.file.as_str())?;
+                        Some((r.file.clone(), (r.psi_deg? - t).abs()))
+                    })
+                    .collect(),
+            )
+        }
+    };
     let base = folder.backdrop.base_plate();
-    let bounds: Vec<Option<bound::PsiBound>> = folder
-        .shots
-        .iter()
-        .map(|p| bound::psi_bound(p, &folder.backdrop, &base, a.blind_r))
-        .collect();
-    let mut csv =
-        String::from("file,material,psi_deg,sigma_psi_bound_deg,sigma_d_bound_px,incoming_px\n");
-    for (p, b) in folder.shots.iter().zip(&bounds) {
-        let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));
-        csv.push_str(&format!(
-            "{},{},{:.6},{},{},{}\n",
-            p.file,
-            p.material_name,
-            p.shot.psi.to_degrees(),
-            cell(b.map(|b| b.sigma_psi_deg)),
-            cell(b.map(|b| b.sigma_d_px)),
-            cell(b.map(|b| b.incoming_px)),
-        ));
+    let mut csv = String::from(
+        "file,material,psi_deg,blind_r,sigma_psi_bound_deg,sigma_d_bound_px,incoming_px\n",
+    );
+    // Per radius: the median |error| of a reader at the bound on every shot, and on the rows the
+    // extractor read.
+    let mut curve: Vec<(f64, Option<f64>, Option<f64>)> = Vec::new();
+    for &k in &a.blind_r {
+        let bounds: Vec<Option<bound::PsiBound>> = folder
+            .shots
+            .iter()
+            .map(|p| bound::psi_bound(p, &folder.backdrop, &base, k))
+            .collect();
+        for (p, b) in folder.shots.iter().zip(&bounds) {
+            let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));
+            csv.push_str(&format!(
+                "{},{},{:.6},{k},{},{},{}\n",
+                p.file,
+                p.material_name,
+                p.shot.psi.to_degrees(),
+                cell(b.map(|b| b.sigma_psi_deg)),
+                cell(b.map(|b| b.sigma_d_px)),
+                cell(b.map(|b| b.incoming_px)),
+            ));
+        }
+        let sigmas: Vec<f64> = bounds.iter().flatten().map(|b| b.sigma_psi_deg).collect();
+        let read: Vec<f64> = folder
+            .shots
+            .iter()
+            .zip(&bounds)
+            .filter(|(p, _)| measured.as_ref().is_some_and(|m| m.contains_key(&p.file)))
+            .filter_map(|(_, b)| b.map(|b| b.sigma_psi_deg))
+            .collect();
+        let all = bound::efficient_median(&sigmas);
+        curve.push((k, all, bound::efficient_median(&read)));
+        let mut sorted = sigmas.clone();
+        sorted.sort_by(f64::total_cmp);
+        println!(
+            "{} {} shots (seed {}): psi's Cramér–Rao bound for {} with an incoming streak in the image{}",
+            folder.shots.len(),
+            folder.tier.name(),
+            args.seed,
+            sigmas.len(),
+            if k > 0.0 {
+                format!(", pixels within {k} R of the impact left out")
+            } else {
+                String::new()
+            }
+        );
+        if !sorted.is_empty() {
+            let quantile = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
+            println!(
+                "  sigma_psi bound: median {:.4}°, 10–90 % {:.4}–{:.4}°; above 1.5°: {}",
+                quantile(0.5),
+                quantile(0.1),
+                quantile(0.9),
+                sorted.iter().filter(|s| **s > 1.5).count()
+            );
+        }
+        if let Some(m) = all {
+            println!("  median |error| of a reader at the bound on every shot: {m:.4}°");
+        }
+    }
+    let extractor = measured.as_ref().and_then(|m| {
+        let mut e: Vec<f64> = m.values().copied().collect();
+        e.sort_by(f64::total_cmp);
+        (!e.is_empty()).then(|| {
+            let n = e.len();
+            let med = if n % 2 == 1 {
+                e[n / 2]
+            } else {
+                0.5 * (e[n / 2 - 1] + e[n / 2])
+            };
+            (med, n)
+        })
+    });
+    if let Some((med, n)) = extractor {
+        println!("  the extractor: median |error| {med:.4}° over its {n} ok rows");
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let file = args.out.join("psi_bound.csv");
     crate::io::write_atomic(&file, csv.as_bytes())?;
-    let sigmas: Vec<f64> = bounds.iter().flatten().map(|b| b.sigma_psi_deg).collect();
-    let mut sorted = sigmas.clone();
-    sorted.sort_by(f64::total_cmp);
-    let quantile = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
-    println!(
-        "{} {} shots (seed {}): psi's Cramér–Rao bound for {} with an incoming streak in the image{}",
-        folder.shots.len(),
-        folder.tier.name(),
-        args.seed,
-        sigmas.len(),
-        if a.blind_r > 0.0 {
-            format!(", pixels within {} R of the impact left out", a.blind_r)
-        } else {
-            String::new()
-        }
-    );
-    if !sorted.is_empty() {
-        println!(
-            "  sigma_psi bound: median {:.4}°, 10–90 % {:.4}–{:.4}°; above 1.5°: {}",
-            quantile(0.5),
-            quantile(0.1),
-            quantile(0.9),
-            sorted.iter().filter(|s| **s > 1.5).count()
-        );
-        if let Some(m) = bound::efficient_median(&sigmas) {
-            println!("  median |error| of a reader at the bound on every shot: {m:.4}°");
-        }
-    }
     println!("wrote {}", file.display());
+    if a.blind_r.len() > 1 {
+        let title = format!(
+            "{} shots, {} tier, seed {}",
+            folder.shots.len(),
+            folder.tier.name(),
+            args.seed
+        );
+        let fig = psi_bound_figure(&title, &curve, extractor);
+        let saved = crate::report::plot::save(&fig, &args.out)?;
+        println!("wrote {}", saved.png.display());
+    }
     Ok(Outcome::Ok)
+}
+
+/// The median |error| of a reader at psi's bound against the blind radius (log scale), on every
+/// shot and on the extractor's `ok` rows, with the extractor's own median |error| over those rows.
+pub fn psi_bound_figure(
+    title: &str,
+    curve: &[(f64, Option<f64>, Option<f64>)],
+    extractor: Option<(f64, usize)>,
+) -> crate::report::plot::Figure {
+    use crate::report::plot::{Dash, Figure, Line, Panel};
+    use plotters::style::RGBColor;
+    let log = |v: Option<f64>| v.filter(|v| *v > 0.0).map(f64::log10);
+    let mut panel = Panel::new(
+        format!("psi's Cramér–Rao bound: {title}"),
+        "streaks' light left out within K ball radii of the impact",
+        "log10 median |psi error| (deg)",
+    );
+    panel.lines.push(
+        Line::new(
+            "a reader at the bound, every shot",
+            RGBColor(30, 90, 170),
+            Dash::Solid,
+        )
+        .with_samples(curve.iter().map(|(k, all, _)| (*k, log(*all), false))),
+    );
+    if let Some((med, n)) = extractor {
+        panel.lines.push(
+            Line::new(
+                "a reader at the bound, the extractor's ok rows",
+                RGBColor(30, 140, 60),
+                Dash::Dashed,
+            )
+            .with_samples(curve.iter().map(|(k, _, read)| (*k, log(*read), false))),
+        );
+        let k_max = curve.iter().map(|c| c.0).fold(0.0, f64::max);
+        panel.lines.push(
+            Line::new(
+                format!("the extractor: median |error| over its {n} ok rows"),
+                RGBColor(200, 40, 40),
+                Dash::Dotted,
+            )
+            .with_samples([
+                (0.0, Some(med.log10()), false),
+                (k_max, Some(med.log10()), false),
+            ]),
+        );
+    }
+    let k_max = curve.iter().map(|c| c.0).fold(1.0, f64::max);
+    let panel = panel.ranges((0.0, k_max), (0.0, 1.0)).auto_y(0.5);
+    Figure::new(
+        "psi_bound",
+        "psi's Cramér–Rao bound with the streaks' light near the impact left out (streakfit bench psi-bound)",
+        vec![panel],
+    )
 }
 
 pub fn run(args: &BenchArgs) -> CliResult {

@@ -431,7 +431,8 @@ fn psi_bound_follows_the_tiers_signal_to_noise() {
         // The CLI writes the same numbers, one row per shot.
         let cli = streakfit::bench::PsiBoundArgs {
             synth: args.clone(),
-            blind_r: 0.0,
+            blind_r: vec![0.0],
+            table: None,
         };
         streakfit::bench::psi_bound(&cli).unwrap();
         let csv = std::fs::read_to_string(args.out.join("psi_bound.csv")).unwrap();
@@ -441,4 +442,46 @@ fn psi_bound_follows_the_tiers_signal_to_noise() {
     };
     let (clean, hard) = (median(Tier::Clean), median(Tier::Hard));
     assert!(hard > 5.0 * clean, "hard {hard}° against clean {clean}°");
+}
+
+/// `bench psi-bound` at several blind radii, with an extraction table: one CSV row per shot and
+/// radius, the figure, and a bad radius is a usage error.
+#[test]
+fn psi_bound_at_several_blind_radii_writes_rows_and_a_figure() {
+    let dir = tmp_dir("bound-blind");
+    let args = small(&dir, Tier::Clean, 3, 5);
+    let folder = synth::plan_for(&args).unwrap();
+    std::fs::create_dir_all(&dir).unwrap();
+    // A hand-made table reading every psi 0.1° high.
+    let mut table =
+        String::from("file,status,material,psi_deg,delta1_deg,delta2_deg,theta1_deg,theta2_deg\n");
+    for p in &folder.shots {
+        table.push_str(&format!(
+            "{},ok,billiard,{},,,,\n",
+            p.file,
+            p.shot.psi.to_degrees() + 0.1
+        ));
+    }
+    let table_path = dir.join("table.csv");
+    std::fs::write(&table_path, table).unwrap();
+    let mut cli = streakfit::bench::PsiBoundArgs {
+        synth: args.clone(),
+        blind_r: vec![0.0, 2.0],
+        table: Some(table_path),
+    };
+    streakfit::bench::psi_bound(&cli).unwrap();
+    let csv = std::fs::read_to_string(dir.join("psi_bound.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 6, "{csv}");
+    assert_eq!(
+        rows.iter().filter(|r| r.contains(",2,")).count(),
+        3,
+        "{csv}"
+    );
+    assert!(dir.join("psi_bound.png").is_file());
+    cli.blind_r = vec![-1.0];
+    assert!(matches!(
+        streakfit::bench::psi_bound(&cli),
+        Err(streakfit::cli::CliError::Usage(_))
+    ));
 }
