@@ -53,6 +53,10 @@ pub struct PsiBoundArgs {
     /// errors are compared with the bounds and drawn in the figure.
     #[arg(long)]
     pub table: Option<PathBuf>,
+    /// Whether the outgoing paths move with `P` and `O` (their light helps to place them) or
+    /// are held (only the incoming streak and the waiting disc do).
+    #[arg(long, value_enum, default_value_t = crate::synth::bound::Outgoing::Attached)]
+    pub outgoing: crate::synth::bound::Outgoing,
 }
 
 #[derive(Debug, Args, Clone)]
@@ -890,7 +894,7 @@ pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
         let bounds: Vec<Option<bound::PsiBound>> = folder
             .shots
             .iter()
-            .map(|p| bound::psi_bound(p, &folder.backdrop, &base, k))
+            .map(|p| bound::psi_bound(p, &folder.backdrop, &base, k, a.outgoing))
             .collect();
         for (p, b) in folder.shots.iter().zip(&bounds) {
             let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));

@@ -421,7 +421,14 @@ fn psi_bound_follows_the_tiers_signal_to_noise() {
             .shots
             .iter()
             .map(|p| {
-                let b = synth::bound::psi_bound(p, &folder.backdrop, &base, 0.0).expect("a bound");
+                let b = synth::bound::psi_bound(
+                    p,
+                    &folder.backdrop,
+                    &base,
+                    0.0,
+                    synth::bound::Outgoing::Attached,
+                )
+                .expect("a bound");
                 assert!(b.sigma_psi_deg.is_finite() && b.sigma_psi_deg > 0.0);
                 assert!(b.incoming_px > 0.0);
                 b.sigma_psi_deg
@@ -433,6 +440,7 @@ fn psi_bound_follows_the_tiers_signal_to_noise() {
             synth: args.clone(),
             blind_r: vec![0.0],
             table: None,
+            outgoing: synth::bound::Outgoing::Attached,
         };
         streakfit::bench::psi_bound(&cli).unwrap();
         let csv = std::fs::read_to_string(args.out.join("psi_bound.csv")).unwrap();
@@ -468,6 +476,7 @@ fn psi_bound_at_several_blind_radii_writes_rows_and_a_figure() {
         synth: args.clone(),
         blind_r: vec![0.0, 2.0],
         table: Some(table_path),
+        outgoing: synth::bound::Outgoing::Held,
     };
     streakfit::bench::psi_bound(&cli).unwrap();
     let csv = std::fs::read_to_string(dir.join("psi_bound.csv")).unwrap();

@@ -8,12 +8,14 @@
 //! rounding to 8 bits) give the Fisher information `F = Σ_px Σ_ch ∂μ/∂θ ∂μ/∂θᵀ / var` of the
 //! image parameters `θ`: the incoming line's sideways shift (which moves `P` and the cue ball's
 //! outgoing path with it) and its turn about `P`; the object ball's `x` and `y` (waiting disc and
-//! outgoing path); and, as nuisances, the turns of both outgoing paths about where they start.
+//! outgoing path); and, as nuisances, the turns of both outgoing paths about where they start
+//! ([`Outgoing::Attached`]; with [`Outgoing::Held`] the outgoing paths' light is known and fixed,
+//! and only the incoming streak and the waiting disc place the line and `O`).
 //! Then `σ_d² = gᵀ F⁻¹ g` with `g = ∂d/∂θ`, and `σ_psi = σ_d / √(|OP|² − d²)`.
 //!
 //! No unbiased reading of these pixels does better, and the bound is optimistic: the cloth's
 //! texture, the lamp, the ball's radius, the streaks' speeds and colours and the outgoing paths'
-//! shapes are taken as known (as with a perfect plate), the camera's tilt and distortion as
+//! shapes (the cue ball's sliding arc among them) are taken as known (as with a perfect plate), the camera's tilt and distortion as
 //! calibrated, and JPEG's losses are ignored. Derivatives are central differences of the exact
 //! dwell-time rendering.
 
@@ -38,6 +40,18 @@ const H_SHIFT: f64 = 0.25;
 /// of 0.05, 0.25 and 0.5 px).
 const H_DISC: f64 = 0.25;
 
+/// What the bound lets the outgoing paths tell about `P` and `O`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Outgoing {
+    /// They start at `P` and `O` and move with them, their shapes known and their directions
+    /// unknown: their light helps to place `P` and `O` (the most a reader could use).
+    Attached,
+    /// Their light is known and does not move: only the incoming streak and the waiting disc
+    /// place the line and `O` (a reader that cannot separate `P`'s position from the unknown
+    /// shape of the cue ball's sliding arc, which starts there).
+    Held,
+}
+
 /// The bound for one shot.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PsiBound {
@@ -54,8 +68,20 @@ pub struct PsiBound {
 /// radii from the impact point `P` (0: every pixel; a reading that cannot use the streaks' light
 /// where they overlap near `P` has at best the bound with that part left out). `None` when no part of the incoming
 /// streak is in the image or the information matrix is singular.
-pub fn psi_bound(p: &ShotPlan, bd: &Backdrop, base: &[f32], blind_r: f64) -> Option<PsiBound> {
-    let (frame, parts) = build_frame_parts(p);
+pub fn psi_bound(
+    p: &ShotPlan,
+    bd: &Backdrop,
+    base: &[f32],
+    blind_r: f64,
+    outgoing: Outgoing,
+) -> Option<PsiBound> {
+    let (frame, mut parts) = build_frame_parts(p);
+    if outgoing == Outgoing::Held {
+        parts = FrameParts {
+            incoming: parts.incoming,
+            ..FrameParts::default()
+        };
+    }
     frame_bound(&frame, &parts, bd, base, blind_r)
 }
 
