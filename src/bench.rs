@@ -865,6 +865,12 @@ pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
     let measured: Option<std::collections::HashMap<String, f64>> = match &a.table {
         None => None,
         Some(t) => {
+            if !t.exists() {
+                return Err(CliError::usage(format!(
+                    "--table: '{}' does not exist",
+                    t.display()
+                )));
+            }
             let rows = crate::table::read_angle_table(t)
                 .map_err(|e| CliError::usage(format!("--table: {e:#}")))?;
             let truth: std::collections::HashMap<&str, f64> = folder
