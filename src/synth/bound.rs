@@ -15,9 +15,9 @@
 //!
 //! No unbiased reading of these pixels does better, and the bound is optimistic: the cloth's
 //! texture, the lamp, the ball's radius, the streaks' speeds and colours and the outgoing paths'
-//! shapes (the cue ball's sliding arc among them) are taken as known (as with a perfect plate), the camera's tilt and distortion as
-//! calibrated, and JPEG's losses are ignored. Derivatives are central differences of the exact
-//! dwell-time rendering.
+//! shapes (the cue ball's sliding arc among them) are taken as known (as with a perfect plate),
+//! the camera's tilt and distortion as calibrated, and JPEG's losses are ignored. Derivatives
+//! are central differences of the exact dwell-time rendering.
 
 use super::render::{self, Acc, Backdrop, Frame};
 use super::{FrameParts, ShotPlan, build_frame_parts};
@@ -44,7 +44,8 @@ const H_DISC: f64 = 0.25;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Outgoing {
     /// They start at `P` and `O` and move with them, their shapes known and their directions
-    /// unknown: their light helps to place `P` and `O` (the most a reader could use).
+    /// unknown: their light helps to place `P` and `O` (more than a reader that does not know
+    /// the sliding arc's shape can use).
     Attached,
     /// Their light is known and does not move: only the incoming streak and the waiting disc
     /// place the line and `O` (a reader that cannot separate `P`'s position from the unknown
@@ -66,8 +67,8 @@ pub struct PsiBound {
 /// The Cramér–Rao bound of `psi` for shot `p` on the table `bd` (`base` is its
 /// [`Backdrop::base_plate`]), from the waiting disc and every pixel farther than `blind_r` ball
 /// radii from the impact point `P` (0: every pixel; a reading that cannot use the streaks' light
-/// where they overlap near `P` has at best the bound with that part left out). `None` when no part of the incoming
-/// streak is in the image or the information matrix is singular.
+/// where they overlap near `P` has at best the bound with that part left out). `None` when no
+/// part of the incoming streak is in the image or the information matrix is singular.
 pub fn psi_bound(
     p: &ShotPlan,
     bd: &Backdrop,
