@@ -896,12 +896,14 @@ pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
     // Per radius: the median |error| of a reader at the bound on every shot, and on the rows the
     // extractor read.
     let mut curve: Vec<(f64, Option<f64>, Option<f64>)> = Vec::new();
-    for &k in &a.blind_r {
-        let bounds: Vec<Option<bound::PsiBound>> = folder
-            .shots
-            .iter()
-            .map(|p| bound::psi_bound(p, &folder.backdrop, &base, k, a.outgoing))
-            .collect();
+    // Per shot, every radius's bound from one rendering.
+    let per_shot: Vec<Vec<Option<bound::PsiBound>>> = folder
+        .shots
+        .iter()
+        .map(|p| bound::psi_bound(p, &folder.backdrop, &base, &a.blind_r, a.outgoing))
+        .collect();
+    for (ik, &k) in a.blind_r.iter().enumerate() {
+        let bounds: Vec<Option<bound::PsiBound>> = per_shot.iter().map(|b| b[ik]).collect();
         for (p, b) in folder.shots.iter().zip(&bounds) {
             let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));
             csv.push_str(&format!(
@@ -924,8 +926,6 @@ pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
             .collect();
         let all = bound::efficient_median(&sigmas);
         curve.push((k, all, bound::efficient_median(&read)));
-        let mut sorted = sigmas.clone();
-        sorted.sort_by(f64::total_cmp);
         println!(
             "{} {} shots (seed {}): psi's Cramér–Rao bound for {} with an incoming streak in the image{}",
             folder.shots.len(),
@@ -938,14 +938,13 @@ pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
                 String::new()
             }
         );
-        if !sorted.is_empty() {
-            let quantile = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
+        if !sigmas.is_empty() {
             println!(
                 "  sigma_psi bound: median {:.4}°, 10–90 % {:.4}–{:.4}°; above 1.5°: {}",
-                quantile(0.5),
-                quantile(0.1),
-                quantile(0.9),
-                sorted.iter().filter(|s| **s > 1.5).count()
+                quantile(&sigmas, 0.5),
+                quantile(&sigmas, 0.1),
+                quantile(&sigmas, 0.9),
+                sigmas.iter().filter(|s| **s > 1.5).count()
             );
         }
         if let Some(m) = all {
@@ -954,16 +953,7 @@ pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
     }
     let extractor = measured.as_ref().and_then(|m| {
         let mut e: Vec<f64> = m.values().copied().collect();
-        e.sort_by(f64::total_cmp);
-        (!e.is_empty()).then(|| {
-            let n = e.len();
-            let med = if n % 2 == 1 {
-                e[n / 2]
-            } else {
-                0.5 * (e[n / 2 - 1] + e[n / 2])
-            };
-            (med, n)
-        })
+        crate::synth::render::median(&mut e).map(|med| (med, e.len()))
     });
     if let Some((med, n)) = extractor {
         println!("  the extractor: median |error| {med:.4}° over its {n} ok rows");
@@ -1002,24 +992,26 @@ pub fn psi_bound_figure(
         "streaks' light left out within K ball radii of the impact",
         "log10 median |psi error| (deg)",
     );
-    panel.lines.push(
-        Line::new(
-            "a reader at the bound, every shot",
-            RGBColor(30, 90, 170),
-            Dash::Solid,
-        )
-        .with_samples(curve.iter().map(|(k, all, _)| (*k, log(*all), false))),
-    );
+    type Point = (f64, Option<f64>, Option<f64>);
+    let bound_line =
+        |label: &str, colour: RGBColor, dash: Dash, pick: fn(&Point) -> Option<f64>| {
+            Line::new(label, colour, dash)
+                .with_samples(curve.iter().map(|c| (c.0, log(pick(c)), false)))
+        };
+    let k_max = curve.iter().map(|c| c.0).fold(0.0, f64::max);
+    panel.lines.push(bound_line(
+        "a reader at the bound, every shot",
+        RGBColor(30, 90, 170),
+        Dash::Solid,
+        |c| c.1,
+    ));
     if let Some((med, n)) = extractor {
-        panel.lines.push(
-            Line::new(
-                "a reader at the bound, the extractor's ok rows",
-                RGBColor(30, 140, 60),
-                Dash::Dashed,
-            )
-            .with_samples(curve.iter().map(|(k, _, read)| (*k, log(*read), false))),
-        );
-        let k_max = curve.iter().map(|c| c.0).fold(0.0, f64::max);
+        panel.lines.push(bound_line(
+            "a reader at the bound, the extractor's ok rows",
+            RGBColor(30, 140, 60),
+            Dash::Dashed,
+            |c| c.2,
+        ));
         panel.lines.push(
             Line::new(
                 format!("the extractor: median |error| over its {n} ok rows"),
@@ -1032,8 +1024,7 @@ pub fn psi_bound_figure(
             ]),
         );
     }
-    let k_max = curve.iter().map(|c| c.0).fold(1.0, f64::max);
-    let panel = panel.ranges((0.0, k_max), (0.0, 1.0)).auto_y(0.5);
+    let panel = panel.ranges((0.0, k_max.max(1.0)), (0.0, 1.0)).auto_y(0.5);
     Figure::new(
         "psi_bound",
         "psi's Cramér–Rao bound with the streaks' light near the impact left out (streakfit bench psi-bound)",

@@ -425,9 +425,9 @@ fn psi_bound_follows_the_tiers_signal_to_noise() {
                     p,
                     &folder.backdrop,
                     &base,
-                    0.0,
+                    &[0.0],
                     synth::bound::Outgoing::Attached,
-                )
+                )[0]
                 .expect("a bound");
                 assert!(b.sigma_psi_deg.is_finite() && b.sigma_psi_deg > 0.0);
                 assert!(b.incoming_px > 0.0);
