@@ -850,7 +850,8 @@ pub fn speed_error(args: &SpeedErrorArgs) -> Result<Vec<BenchRow>, CliError> {
 /// `bench psi-bound`: the bound of every planned shot ([`crate::synth::bound`]) at each blind
 /// radius, written to `OUT/psi_bound.csv` (`file, material, psi_deg, blind_r,
 /// sigma_psi_bound_deg, sigma_d_bound_px, incoming_px`), with a summary on standard output and,
-/// for several radii, the figure `OUT/psi_bound.png|svg`: the median |error| of a reader at the
+/// for several radii, the figure `OUT/psi_bound/psi_bound.png|svg` (in a folder of its own, so
+/// that `extract OUT` does not take it for a photo): the median |error| of a reader at the
 /// bound against the blind radius, and the extractor's with `--table`.
 pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
     use crate::synth::bound;
@@ -971,7 +972,7 @@ pub fn psi_bound(a: &PsiBoundArgs) -> CliResult {
             args.seed
         );
         let fig = psi_bound_figure(&title, &curve, extractor);
-        let saved = crate::report::plot::save(&fig, &args.out)?;
+        let saved = crate::report::plot::save(&fig, &args.out.join("psi_bound"))?;
         println!("wrote {}", saved.png.display());
     }
     Ok(Outcome::Ok)

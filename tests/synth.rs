@@ -487,7 +487,7 @@ fn psi_bound_at_several_blind_radii_writes_rows_and_a_figure() {
         3,
         "{csv}"
     );
-    assert!(dir.join("psi_bound.png").is_file());
+    assert!(dir.join("psi_bound").join("psi_bound.png").is_file());
     cli.blind_r = vec![-1.0];
     assert!(matches!(
         streakfit::bench::psi_bound(&cli),
