@@ -632,7 +632,10 @@ fn a_drawn_cue_balls_way_back_is_not_read_as_the_incoming_streak() {
 /// the narrow margin). Its samples clear of the narrow margin read it. Measured 2026-11-25 on
 /// this set (seed 1): 6/6 ok, psi 0.004–0.029° off, theta2 0.011–0.028°, theta1 0.014–0.094°
 /// but 0.73° at a stated 0.89° and 1.9° at 2.5° (rolling lines clear of the other streaks for
-/// little more than R).
+/// little more than R). Since session 26 (the joint fit's model choice weighs each group of
+/// samples by its own noise scale) shot_001's cue ball path is a straight line from P, clear of
+/// the other streaks for 2.8 R, and its theta1 (1.9° off at a stated 4.9° before) is reported
+/// unresolved with that reason; the other five read as before.
 #[test]
 fn a_stunned_cue_balls_short_path_is_read() {
     let dir = scratch("stun_short");
@@ -654,7 +657,20 @@ fn a_stunned_cue_balls_short_path_is_read() {
     let _ = std::fs::remove_dir_all(&dir);
     let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
     assert_eq!(ok, 6, "{rows:#?}");
-    assert_eq!(errs["theta1"].len(), 6, "theta1 on every shot: {rows:#?}");
+    // theta1 on every shot, or stated unresolved for the one reason a short path allows.
+    let unresolved = rows
+        .iter()
+        .filter(|r| r.theta1_deg.is_none())
+        .inspect(|r| {
+            assert!(
+                r.reason
+                    .contains("too short to tell a straight path from P from a hidden slide"),
+                "{r:#?}"
+            )
+        })
+        .count();
+    assert!(unresolved <= 1, "{rows:#?}");
+    assert_eq!(errs["theta1"].len() + unresolved, 6, "{rows:#?}");
     for (k, bound) in [("psi", 0.1), ("theta2", 0.1)] {
         let worst = errs[k].iter().cloned().fold(0.0, f64::max);
         assert!(worst < bound, "{k} errors {:?}", errs[k]);

@@ -18,6 +18,9 @@
 //!   sub-pixel edge points;
 //! - [`streak`]: coarse streak detection on a downsampled signal, then full-resolution tracking of
 //!   each streak's centre-line by symmetric centroids of baseline-subtracted cross-profiles;
+//! - [`linefit`]: the incoming streak re-measured from its pixels in blocks one radius long
+//!   (the dwell model of a straight streak fitted to each block's cells), where profile-by-profile
+//!   centres scatter at a few grey levels of contrast;
 //! - [`pathfit`]: the joint physical model (incoming line, contact geometry, one path per outgoing
 //!   ball: line, or sliding parabola tangent to the rolling line), robust start, Levenberg–Marquardt,
 //!   model choice by BIC and covariance;
@@ -45,6 +48,7 @@ pub mod arc;
 pub mod background;
 pub mod disc;
 pub mod image_io;
+pub mod linefit;
 pub mod overlay;
 pub mod pathfit;
 pub mod shot;

@@ -1141,6 +1141,33 @@ impl Default for FitSettings {
     }
 }
 
+/// Reduced χ² and correlation factor of each residual group (incoming, ball 1, ball 2) under
+/// path models `combo`; 1 for an empty group and for a crept object ball's one rest point.
+fn group_scales(
+    r: &[f64],
+    bounds: &[usize; 5],
+    combo: Combo,
+    object_rest: bool,
+) -> ([f64; 3], [f64; 3]) {
+    let mut s2 = [1.0; 3];
+    let mut corr = [1.0; 3];
+    for g in 0..3 {
+        let rows = &r[bounds[g + 1]..bounds[g + 2]];
+        if rows.is_empty() || (g == 2 && object_rest) {
+            continue;
+        }
+        let k_g = match g {
+            0 => 2.0,
+            1 => combo.0.map_or(0.0, |m| m.n_params() as f64) + 1.0,
+            _ => combo.1.n_params() as f64 + 1.0,
+        };
+        s2[g] = (rows.iter().map(|v| v * v).sum::<f64>() / (rows.len() as f64 - k_g).max(1.0))
+            .max(1e-6);
+        corr[g] = correlation_factor(rows);
+    }
+    (s2, corr)
+}
+
 /// Fits the joint model, robustly, for every combination of path models, and keeps the one with
 /// the lowest BIC. `x0` is a start in the richest layout: `parabola+line` for each ball (ball 1
 /// absent when `out1` is), the object ball a `line` when `object_rest`.
@@ -1231,24 +1258,12 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     };
     // The last fit's evaluation holds when its inliers did not change, else evaluate afresh.
     let ev_full = ev_full.unwrap_or_else(|| model_full.eval(&x, true));
-    let (r_full, b_full) = (&ev_full.r, ev_full.bounds);
-    let n_obs = r_full.len() - b_full[1];
+    // Each group's own noise scale and correlation (the blocks of `linefit` and the profile
+    // samples of `streak` state their sigmas differently): a pooled scale let one group's
+    // conservative sigmas make the others' χ² improvements look significant.
+    let (s2_ref, corr_ref) = group_scales(&ev_full.r, &ev_full.bounds, full, pb.object_rest);
+    let corr_ref = corr_ref.map(|c| c.max(1.0));
     let k_full = model_full.n_params();
-    let chi_full: f64 = r_full[b_full[1]..].iter().map(|v| v * v).sum();
-    let s2_ref = (chi_full / (n_obs.saturating_sub(k_full)).max(1) as f64).max(1e-12);
-    let corr_ref = {
-        let (r, b) = (r_full, b_full);
-        let mut acc = 0.0;
-        let mut n = 0.0;
-        for g in 1..4 {
-            let rows = &r[b[g]..b[g + 1]];
-            if !rows.is_empty() {
-                acc += correlation_factor(rows) * rows.len() as f64;
-                n += rows.len() as f64;
-            }
-        }
-        (acc / n.max(1.0)).max(1.0)
-    };
     let combos: Vec<(Option<PathModel>, PathModel)> = if settings.line_only {
         vec![full]
     } else {
@@ -1273,9 +1288,14 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
             let (xs, ev, model) = model_fit(pb, c.0, c.1, &start, use_.clone(), settings);
             (xs, ev, model.n_params())
         };
-        let chi: f64 = ev.r[ev.bounds[1]..].iter().map(|v| v * v).sum();
         // Neighbouring samples are correlated: count independent information only.
-        let bic = chi / (s2_ref * corr_ref) + k as f64 * (n_obs as f64 / corr_ref).ln();
+        let (mut chi, mut n_eff) = (0.0, 0.0);
+        for g in 0..3 {
+            let rows = &ev.r[ev.bounds[g + 1]..ev.bounds[g + 2]];
+            chi += rows.iter().map(|v| v * v).sum::<f64>() / (s2_ref[g] * corr_ref[g]);
+            n_eff += rows.len() as f64 / corr_ref[g];
+        }
+        let bic = chi + k as f64 * n_eff.ln();
         if best.as_ref().is_none_or(|b| bic < b.0) {
             best = Some((bic, xs, c, ev));
         }
@@ -1283,22 +1303,7 @@ pub fn fit(pb: &Problem, x0: &[f64], settings: &FitSettings) -> Option<JointFit>
     let (bic, xb, cb, ev) = best?;
     let Eval { r, bounds, j } = ev;
     let j = j.expect("evaluated with the Jacobian");
-    let mut s2 = [1.0; 3];
-    let mut corr = [1.0; 3];
-    for g in 0..3 {
-        let rows = &r[bounds[g + 1]..bounds[g + 2]];
-        if rows.is_empty() || (g == 2 && pb.object_rest) {
-            continue;
-        }
-        let k_g = match g {
-            0 => 2.0,
-            1 => cb.0.map_or(0.0, |m| m.n_params() as f64) + 1.0,
-            _ => cb.1.n_params() as f64 + 1.0,
-        };
-        s2[g] = (rows.iter().map(|v| v * v).sum::<f64>() / (rows.len() as f64 - k_g).max(1.0))
-            .max(1e-6);
-        corr[g] = correlation_factor(rows);
-    }
+    let (s2, corr) = group_scales(&r, &bounds, cb, pb.object_rest);
     // Rows of group g divided by sqrt(s_g² f_g): weights 1 / (s_g² f_g) in J'ᵀ J'.
     let w = [
         1.0,
