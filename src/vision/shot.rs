@@ -1904,6 +1904,7 @@ fn read_body(
     }
     // The incoming line from its pixels, block by block (`linefit`): at a few grey levels of
     // contrast the profile-by-profile samples scatter several times their sigma.
+    let t_blocks = std::time::Instant::now();
     let blocks = opts.incoming_block_r.and_then(|len| {
         incoming_blocks(
             sig,
@@ -1917,11 +1918,13 @@ fn read_body(
     });
     if debug {
         eprintln!(
-            "incoming: {} samples, {:?} blocks",
+            "incoming: {} samples, {:?} blocks ({:.1} ms)",
             measured[reading.inc].len(),
-            blocks.as_ref().map(Vec::len)
+            blocks.as_ref().map(Vec::len),
+            t_blocks.elapsed().as_secs_f64() * 1e3
         );
     }
+    let used_blocks = blocks.is_some();
     let mut pb = Problem {
         o_meas: o,
         sigma_o: dsc.sigma_c.max(0.02),
@@ -1994,11 +1997,14 @@ fn read_body(
     // Blocks are few (a block per R): where the robust fit leaves fewer than it needs, the
     // profile samples still may do.
     let fit = fit_problem(&pb).or_else(|| {
-        (pb.incoming.len() != measured[reading.inc].len()).then(|| {
+        used_blocks.then(|| {
             pb.incoming = measured[reading.inc].clone();
             fit_problem(&pb)
         })?
     });
+    // The overlay shows the incoming samples the line was fitted to (blocks or profiles): the
+    // fit's inlier flags index them.
+    out.streaks[reading.inc].1 = pb.incoming.clone();
     let Some(fit) = fit else {
         out.reason = "path fit failed (too few consistent centre-line points)".into();
         return out;
