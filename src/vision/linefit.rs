@@ -14,9 +14,11 @@
 //! The amplitudes and the baseline are linear and eliminated per block (variable projection);
 //! first `(n₀, φ)` is fitted over all blocks at once (Gauss–Newton, from the samples' line), then
 //! each block's own offset `n₀ + δ_b` with `φ` and the shading's share `a₂/a₀` of all blocks
-//! held. Each block gives one [`Sample`] at its centre
-//! with the sigma of its offset (from its cells' residual scatter and the offset's curvature), so
-//! the joint path fit ([`super::pathfit`]) weighs, rescales and tests them like any samples.
+//! held. Each block gives one [`Sample`] at its centre with the sigma of its offset (from its
+//! cells' residual scatter and the offset's curvature), so the joint path fit
+//! ([`super::pathfit`]) weighs, rescales and tests them like any samples. The scene reading uses
+//! them for the incoming streak where its profile samples scatter 1.5 times their sigma or more
+//! (`shot::BLOCKS_FROM_SCATTER`: where the profiles hold, their measured template reads better).
 //!
 //! Frame: `s` runs along the line's unit direction `d` from its point `p`, `n = d × (q − p)`.
 
