@@ -206,7 +206,7 @@ fn gauss_newton(
 /// Re-measures a straight streak (the incoming one) along the line through `p` with unit
 /// direction `d`, between `s_lo` and `s_hi` along it, in blocks `block` px long, with `excl`'s
 /// pixels left out; `proj` is the streak colour's projector ([`Signal::projector`]). `None` when
-/// the pixels do not give a line (fewer than [`MIN_BLOCKS`] blocks, or a singular fit).
+/// the pixels do not give a line (fewer than five blocks, or a singular fit).
 #[allow(clippy::too_many_arguments)]
 pub fn block_samples(
     sig: &Signal,

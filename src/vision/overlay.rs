@@ -2,8 +2,9 @@
 //!
 //! Yellow circle: the fitted object-ball disc (`O`, `R`); cyan circle: the cue ball at impact
 //! (`P`, `R`); dots: centre-line samples (white incoming, one per radius where its line was read
-//! from blocks of pixels, [`super::linefit`]; orange cue ball, magenta object ball, grey rejected); green curves: fitted paths (parabola then rolling line); red and green arrows:
-//! the frame axes `x` (line of centres) and `y` (after the mirror); text: status and angles with
+//! from blocks of pixels, [`super::linefit`]; orange cue ball, magenta object ball, grey
+//! rejected); green curves: fitted paths (parabola then rolling line); red and green arrows: the
+//! frame axes `x` (line of centres) and `y` (after the mirror); text: status and angles with
 //! 1-sigma uncertainties. The photo is brightened (gamma) so faint streaks are visible.
 
 use super::image_io::RgbImage;

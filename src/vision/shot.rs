@@ -1164,11 +1164,11 @@ fn refine_to_scale(
 /// An `ok` reading refused when the ball radius its joint fit settled on (half the centres'
 /// distance at impact, which the incoming line, the object ball's path and the disc fix together)
 /// leaves the scale's window [`FIT_SCALE_RATIO`]: the fit has pulled the disc to meet a misread
-/// streak. Measured on 15 synthetic sets (seeds 8 and 101–505) and two lossless hard sets (276 `ok`
-/// rows, when this check was added): the right readings lay at 0.95–1.07 of the scale's radius; outside the
-/// window [`DISC_SCALE_RATIO`] then used lay only misreadings, 7–18° off at stated errors below
-/// 0.8° (stray-ball shots: a streak misread, a dark object ball's disc fitted off its edge).
-/// Narrowed in session 26 (see [`FIT_SCALE_RATIO`]).
+/// streak. Measured on 15 synthetic sets (seeds 8 and 101–505) and two lossless hard sets (276
+/// `ok` rows, when this check was added): the right readings lay at 0.95–1.07 of the scale's
+/// radius; outside the window [`DISC_SCALE_RATIO`] then used lay only misreadings, 7–18° off at
+/// stated errors below 0.8° (stray-ball shots: a streak misread, a dark object ball's disc
+/// fitted off its edge). Narrowed in session 26 (see [`FIT_SCALE_RATIO`]).
 fn within_scale(mut a: Analysis, scene_radius_px: Option<f64>) -> Analysis {
     let (Some(rc), Some(fit)) = (scene_radius_px, a.fit.as_ref()) else {
         return a;
