@@ -18,8 +18,10 @@
 //! each curve, see [`PathGeom::distance_grad`]; tested against central differences) and normal
 //! equations summed over the columns each residual group touches. Outliers (crossing streaks, highlights): samples beyond
 //! `max(4 s, 3)` normalised units (`s` = MAD scale) are dropped and the fit repeated.
-//! Model choice per ball by BIC, `χ²/(s² f) + k ln(n/f)`, with `s²` and the correlation factor
-//! `f` (below) from the richest model, so correlated samples are not counted as independent.
+//! Model choice per ball by BIC, `Σ_g χ²_g/(s_g² f_g) + k ln(Σ_g n_g/f_g)`, with each residual
+//! group's `s_g²` and correlation factor `f_g` (below) from the richest model, so correlated
+//! samples are not counted as independent and groups that state their sigmas differently (the
+//! incoming blocks of [`super::linefit`], the profile samples) are each on their own scale.
 //! Covariance `(J'ᵀ J')⁻¹`, where each residual group's rows are divided by `sqrt(s_g² f_g)`:
 //! `s_g²` its reduced χ² and `f_g = 1 + 2 Σ ρ_k` the correlation factor of its ordered residuals
 //! (neighbouring centre-line samples share cloth texture and noise), so the stated sigma counts

@@ -258,6 +258,17 @@ pub struct Line {
     pub d: (f64, f64),
 }
 
+impl Line {
+    /// Signed distance of `q` from the line (positive to the left of `d`).
+    pub fn offset(&self, q: (f64, f64)) -> f64 {
+        self.d.0 * (q.1 - self.p.1) - self.d.1 * (q.0 - self.p.0)
+    }
+    /// Position of `q`'s foot on the line, along `d` from `p`.
+    pub fn along(&self, q: (f64, f64)) -> f64 {
+        (q.0 - self.p.0) * self.d.0 + (q.1 - self.p.1) * self.d.1
+    }
+}
+
 /// Scatter of the incoming centre-line samples about their line, in units of their stated
 /// sigmas (median |pull| / 0.6745), from which they are replaced by blocks ([`incoming_blocks`]).
 /// Session 26, 19 synthetic sets, psi's median |error| over the photos read both ways: below
@@ -269,25 +280,25 @@ pub struct Line {
 const BLOCKS_FROM_SCATTER: f64 = 1.5;
 
 /// The incoming streak re-measured from its pixels in blocks `block_r` radii long
-/// ([`linefit::block_samples`]) over the span of its centre-line `samples`, on their line, when
-/// the samples scatter about it by [`BLOCKS_FROM_SCATTER`] of their sigmas or more.
+/// ([`linefit::block_samples`]) over the span of its centre-line `samples`, on their `line`
+/// ([`fit_line`]), when the samples scatter about it by [`BLOCKS_FROM_SCATTER`] of their sigmas
+/// or more.
+#[allow(clippy::too_many_arguments)]
 fn incoming_blocks(
     sig: &Signal,
     samples: &[Sample],
+    line: &Line,
     p_imp: (f64, f64),
     r: f64,
     excl: &streak::Exclusion,
     colour: [f32; 3],
     block_r: f64,
 ) -> Option<Vec<Sample>> {
-    let line = fit_line(samples)?;
-    let mut pulls: Vec<f32> = samples
+    let pulls: Vec<f32> = samples
         .iter()
-        .map(|q| {
-            ((line.d.0 * (q.y - line.p.1) - line.d.1 * (q.x - line.p.0)) / q.sigma).abs() as f32
-        })
+        .map(|q| (line.offset((q.x, q.y)) / q.sigma) as f32)
         .collect();
-    let scatter = background::median(&mut pulls) as f64 / 0.6745;
+    let scatter = background::mad_sigma_about(&pulls, 0.0) as f64;
     if std::env::var_os("STREAKFIT_DEBUG").is_some() {
         eprintln!("incoming samples: scatter {scatter:.3} x their sigma");
     }
@@ -295,16 +306,15 @@ fn incoming_blocks(
         return None;
     }
     // Outward from the impact, measured from the foot of P on the line.
-    let along = |q: (f64, f64)| (q.0 - line.p.0) * line.d.0 + (q.1 - line.p.1) * line.d.1;
-    let sign = if samples.iter().map(|q| along((q.x, q.y))).sum::<f64>()
-        >= samples.len() as f64 * along(p_imp)
+    let sign = if samples.iter().map(|q| line.along((q.x, q.y))).sum::<f64>()
+        >= samples.len() as f64 * line.along(p_imp)
     {
         1.0
     } else {
         -1.0
     };
     let d = (sign * line.d.0, sign * line.d.1);
-    let t = along(p_imp);
+    let t = line.along(p_imp);
     let foot = (line.p.0 + t * line.d.0, line.p.1 + t * line.d.1);
     let s: Vec<f64> = samples
         .iter()
@@ -532,7 +542,7 @@ fn read_scene(
             // off at its far end must not turn the object ball around).
             let t2 = wrap(l2.d.1.atan2(l2.d.0) - alpha);
             // The object ball's rolling line passes close to its start O.
-            let miss2 = (l2.d.0 * (o.1 - l2.p.1) - l2.d.1 * (o.0 - l2.p.0)).abs();
+            let miss2 = l2.offset(o).abs();
             if t2.abs() > OBJECT_THROW_MAX_DEG.to_radians() || miss2 > 1.5 * r {
                 if std::env::var_os("STREAKFIT_DEBUG").is_some() {
                     eprintln!(
@@ -690,7 +700,7 @@ fn read_creep(
                     .map(|c| (colours[inc][c] * colours[b1][c]) as f64)
                     .sum();
                 // The cue ball's rolling line passes near P (it turns by little at grazing).
-                let miss1 = (l1.d.0 * (p.1 - l1.p.1) - l1.d.1 * (p.0 - l1.p.0)).abs();
+                let miss1 = l1.offset(p).abs();
                 let d1m = m * t1;
                 if debug {
                     eprintln!(
@@ -1905,10 +1915,13 @@ fn read_body(
     // The incoming line from its pixels, block by block (`linefit`): at a few grey levels of
     // contrast the profile-by-profile samples scatter several times their sigma.
     let t_blocks = std::time::Instant::now();
-    let blocks = opts.incoming_block_r.and_then(|len| {
+    // The incoming samples' robust line: the blocks' start, and the joint fit's on the samples.
+    let inc_line = fit_line(&measured[reading.inc]);
+    let blocks = opts.incoming_block_r.zip(inc_line).and_then(|(len, line)| {
         incoming_blocks(
             sig,
             &measured[reading.inc],
+            &line,
             p_imp,
             r,
             &exclusion_for(reading.inc),
@@ -1953,13 +1966,12 @@ fn read_body(
         ..opts.fit
     };
     // Path starts from the re-measured samples (longer and cleaner than the scene reading's).
-    let fit_problem = |pb: &Problem| -> Option<JointFit> {
+    let fit_problem = |pb: &Problem, inc_line: Option<Line>| -> Option<JointFit> {
         let starts: Vec<Vec<f64>> = {
             // Impact geometry first, from the re-measured incoming line alone (the arcs are built
             // on it: a start whose arcs do not meet this P leaves the joint fit in a curved valley).
             let mut x0 = reading.x0.clone();
-            if let Some((_, alpha, psi_s)) =
-                fit_line(&pb.incoming).and_then(|li| impact_from_incoming(&li, o, r))
+            if let Some((_, alpha, psi_s)) = inc_line.and_then(|li| impact_from_incoming(&li, o, r))
             {
                 x0[3] = alpha;
                 x0[4] = psi_s;
@@ -1996,10 +2008,15 @@ fn read_body(
     };
     // Blocks are few (a block per R): where the robust fit leaves fewer than it needs, the
     // profile samples still may do.
-    let fit = fit_problem(&pb).or_else(|| {
+    let first_line = if used_blocks {
+        fit_line(&pb.incoming)
+    } else {
+        inc_line
+    };
+    let fit = fit_problem(&pb, first_line).or_else(|| {
         used_blocks.then(|| {
             pb.incoming = measured[reading.inc].clone();
-            fit_problem(&pb)
+            fit_problem(&pb, inc_line)
         })?
     });
     // The overlay shows the incoming samples the line was fitted to (blocks or profiles): the
