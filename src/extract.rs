@@ -16,6 +16,7 @@
 
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::scene::{ImageScene, SceneConfig};
+use crate::synth::materials::Materials;
 use crate::table::{ShotRow, Status, TableFormat, write_angle_table};
 use crate::vision::{
     AnalysisOptions, Cloth, analyse,
@@ -333,6 +334,41 @@ fn write_overlay(
     std::fs::rename(&tmp, &path).with_context(|| format!("cannot rename to '{}'", path.display()))
 }
 
+/// How far the balls' friction may exceed their material preset's (Table 1 of the paper) and
+/// still be read: a pair twice as grippy as the paper's. It bounds the object ball's throw
+/// ([`AnalysisOptions::throw_max_deg`]: billiard 8.0°, steel 21°, rubber unbounded by it).
+pub const FRICTION_MARGIN: f64 = 2.0;
+
+/// The largest ball–ball friction (`FRICTION_MARGIN × max(mu, mu0)`) of each material named by
+/// the jobs' scenes that the presets (`datasets/materials.toml`) hold. A material without a preset
+/// is left out: its object ball's throw is bounded only by [`AnalysisOptions::throw_max_deg`]'s
+/// default.
+pub fn ball_friction_bounds(jobs: &[Job]) -> HashMap<String, f64> {
+    let named: Vec<&String> = jobs
+        .iter()
+        .filter_map(|j| j.scene.material.as_ref())
+        .collect();
+    if named.is_empty() {
+        return HashMap::new();
+    }
+    let presets = match Materials::load(&Materials::default_path()) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!(
+                "extract: no material presets ({e}); the object ball's throw is not bounded by its friction"
+            );
+            return HashMap::new();
+        }
+    };
+    named
+        .into_iter()
+        .filter_map(|m| {
+            let p = presets.get(m).ok()?;
+            Some((m.clone(), FRICTION_MARGIN * p.mu.max(p.mu_static)))
+        })
+        .collect()
+}
+
 pub fn run(args: &ExtractArgs) -> CliResult {
     TableFormat::from_path(&args.out).map_err(|e| CliError::usage(format!("--out: {e}")))?;
     let shard = args
@@ -391,6 +427,7 @@ pub fn run(args: &ExtractArgs) -> CliResult {
         indicatif::ProgressBar::hidden()
     };
     let opts = AnalysisOptions::default();
+    let friction = ball_friction_bounds(&jobs);
     let textures = if args.no_texture {
         HashMap::new()
     } else {
@@ -399,6 +436,14 @@ pub fn run(args: &ExtractArgs) -> CliResult {
     let rows: Vec<ShotRow> = pool.install(|| {
         jobs.par_iter()
             .map(|j| {
+                let opts = AnalysisOptions {
+                    ball_friction_max: j
+                        .scene
+                        .material
+                        .as_ref()
+                        .and_then(|m| friction.get(m).copied()),
+                    ..opts.clone()
+                };
                 let row = process(
                     j,
                     j.plate.as_ref().and_then(|p| plates.get(p)),
@@ -428,4 +473,42 @@ pub fn run(args: &ExtractArgs) -> CliResult {
     } else {
         Outcome::Ok
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job(material: Option<&str>) -> Job {
+        Job {
+            path: PathBuf::from("shot.png"),
+            file: "shot.png".into(),
+            scene: ImageScene {
+                material: material.map(String::from),
+                ..ImageScene::default()
+            },
+            plate: None,
+        }
+    }
+
+    /// Twice the larger of the preset's two ball–ball frictions (Table 1), per named material;
+    /// a material without a preset gets no bound of its own.
+    #[test]
+    fn friction_bounds_come_from_the_presets() {
+        let bounds = ball_friction_bounds(&[
+            job(Some("billiard")),
+            job(Some("steel")),
+            job(Some("felt")),
+            job(None),
+        ]);
+        assert_eq!(bounds.len(), 2);
+        assert!((bounds["billiard"] - 0.14).abs() < 1e-12);
+        assert!((bounds["steel"] - 0.36).abs() < 1e-12);
+        let opts = AnalysisOptions {
+            ball_friction_max: Some(bounds["billiard"]),
+            ..AnalysisOptions::default()
+        };
+        assert!((opts.throw_max_deg() - 8.0478).abs() < 1e-4);
+        assert!(ball_friction_bounds(&[job(None)]).is_empty());
+    }
 }
