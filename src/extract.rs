@@ -19,7 +19,7 @@ use crate::scene::{ImageScene, SceneConfig};
 use crate::synth::materials::Materials;
 use crate::table::{ShotRow, Status, TableFormat, write_angle_table};
 use crate::vision::{
-    AnalysisOptions, Cloth, analyse,
+    Analysis, AnalysisOptions, Cloth, analyse,
     image_io::{self, RgbImage},
     overlay,
     texture::{self, ClothTexture},
@@ -274,24 +274,7 @@ pub fn process(
                     &material,
                 ),
                 Ok(a) => {
-                    let mut row = ShotRow::failed(&job.file, a.status, a.reason.clone(), &material);
-                    row.psi_deg = a.psi_deg;
-                    row.delta1_deg = a.delta1_deg;
-                    row.delta2_deg = a.delta2_deg;
-                    row.theta1_deg = a.theta1_deg;
-                    row.theta2_deg = a.theta2_deg;
-                    row.psi_err_deg = a.psi_err_deg;
-                    row.delta1_err_deg = a.delta1_err_deg;
-                    row.delta2_err_deg = a.delta2_err_deg;
-                    row.theta1_err_deg = a.theta1_err_deg;
-                    row.theta2_err_deg = a.theta2_err_deg;
-                    row.frame_err_deg = a.frame_err_deg;
-                    row.path_model1 = a.path_model1.clone();
-                    row.path_model2 = a.path_model2.clone();
-                    row.cloth_model = a.cloth.map(|c| c.as_str().to_string());
-                    row.ball_radius_px = a.ball_radius_px;
-                    row.impact_x_px = a.impact.map(|p| p.0);
-                    row.impact_y_px = a.impact.map(|p| p.1);
+                    let mut row = row_of(job, &a);
                     if let Some(dir) = overlays
                         && let Err(e) = write_overlay(dir, &job.file, &img, &a)
                     {
@@ -308,6 +291,32 @@ pub fn process(
     row.spin = job.scene.spin;
     row.english = job.scene.english;
     row.seconds = t0.elapsed().as_secs_f64();
+    row
+}
+
+/// The table row of an analysis of `job` (its `seconds` left at 0).
+pub fn row_of(job: &Job, a: &Analysis) -> ShotRow {
+    let material = job.scene.material.as_deref().unwrap_or("unknown");
+    let mut row = ShotRow::failed(&job.file, a.status, a.reason.clone(), material);
+    row.psi_deg = a.psi_deg;
+    row.delta1_deg = a.delta1_deg;
+    row.delta2_deg = a.delta2_deg;
+    row.theta1_deg = a.theta1_deg;
+    row.theta2_deg = a.theta2_deg;
+    row.psi_err_deg = a.psi_err_deg;
+    row.delta1_err_deg = a.delta1_err_deg;
+    row.delta2_err_deg = a.delta2_err_deg;
+    row.theta1_err_deg = a.theta1_err_deg;
+    row.theta2_err_deg = a.theta2_err_deg;
+    row.frame_err_deg = a.frame_err_deg;
+    row.path_model1 = a.path_model1.clone();
+    row.path_model2 = a.path_model2.clone();
+    row.cloth_model = a.cloth.map(|c| c.as_str().to_string());
+    row.ball_radius_px = a.ball_radius_px;
+    row.impact_x_px = a.impact.map(|p| p.0);
+    row.impact_y_px = a.impact.map(|p| p.1);
+    row.spin = job.scene.spin;
+    row.english = job.scene.english;
     row
 }
 
@@ -367,6 +376,22 @@ pub fn ball_friction_bounds(jobs: &[Job]) -> HashMap<String, f64> {
             Some((m.clone(), FRICTION_MARGIN * p.mu.max(p.mu_static)))
         })
         .collect()
+}
+
+/// `base` with the friction bound of the job's material ([`ball_friction_bounds`]).
+pub fn job_options(
+    job: &Job,
+    base: &AnalysisOptions,
+    friction: &HashMap<String, f64>,
+) -> AnalysisOptions {
+    AnalysisOptions {
+        ball_friction_max: job
+            .scene
+            .material
+            .as_ref()
+            .and_then(|m| friction.get(m).copied()),
+        ..base.clone()
+    }
 }
 
 pub fn run(args: &ExtractArgs) -> CliResult {
@@ -436,14 +461,7 @@ pub fn run(args: &ExtractArgs) -> CliResult {
     let rows: Vec<ShotRow> = pool.install(|| {
         jobs.par_iter()
             .map(|j| {
-                let opts = AnalysisOptions {
-                    ball_friction_max: j
-                        .scene
-                        .material
-                        .as_ref()
-                        .and_then(|m| friction.get(m).copied()),
-                    ..opts.clone()
-                };
+                let opts = job_options(j, &opts, &friction);
                 let row = process(
                     j,
                     j.plate.as_ref().and_then(|p| plates.get(p)),

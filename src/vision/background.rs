@@ -705,6 +705,75 @@ pub fn box_blur(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
 mod tests {
     use proptest::prelude::*;
 
+    /// Block means against the plain definition, on an image whose size the blocks do not
+    /// divide; and the cloth polynomial of a smooth surface recovered to rounding.
+    #[test]
+    fn block_means_and_the_cloth_polynomial_hold_their_definitions() {
+        use super::super::image_io::RgbImage;
+        let (w, h) = (203, 151);
+        let val = |x: usize, y: usize, c: usize| {
+            let (xf, yf) = (x as f32 / w as f32, y as f32 / h as f32);
+            0.2 + 0.3 * xf * xf - 0.1 * yf + 0.05 * c as f32 + 0.01 * ((x * 7 + y * 13) % 5) as f32
+        };
+        let data = (0..h)
+            .flat_map(|y| (0..w).flat_map(move |x| (0..3).map(move |c| val(x, y, c))))
+            .collect();
+        let img = RgbImage { w, h, data };
+        for f in [1, 2, 4, 5] {
+            let (cw, ch, m) = super::block_mean(&img, f);
+            assert_eq!((cw, ch), (w / f, h / f));
+            for (cy, cx) in [(0, 0), (ch - 1, cw - 1), (ch / 2, cw / 3)] {
+                for (c, got) in m[cy * cw + cx].iter().enumerate() {
+                    let mut s = 0.0f64;
+                    for y in cy * f..cy * f + f {
+                        for x in cx * f..cx * f + f {
+                            s += val(x, y, c) as f64;
+                        }
+                    }
+                    let want = s / (f * f) as f64;
+                    assert!((*got as f64 - want).abs() < 1e-6, "f {f}");
+                }
+            }
+        }
+        // A degree-4 surface on a 600 × 400 grid, one block lifted by a "ball".
+        let (cw, ch) = (600, 400);
+        let surf =
+            |x: f64, y: f64| 0.4 + 0.1 * x - 0.05 * y * y + 0.02 * x * x * y * y - 0.03 * x.powi(4);
+        let mut coarse: Vec<[f32; 3]> = (0..ch)
+            .flat_map(|y| {
+                (0..cw).map(move |x| {
+                    let (xn, yn) = (
+                        2.0 * (x as f64 + 0.5) / cw as f64 - 1.0,
+                        2.0 * (y as f64 + 0.5) / ch as f64 - 1.0,
+                    );
+                    let v = surf(xn, yn) as f32;
+                    [v, 0.5 * v, 0.25 * v]
+                })
+            })
+            .collect();
+        for y in 100..140 {
+            for x in 300..340 {
+                coarse[y * cw + x][0] += 0.3;
+            }
+        }
+        let fitted = super::fit_cloth_surface(cw, ch, &coarse);
+        for (x, y) in [(5, 5), (590, 395), (20, 380), (450, 60)] {
+            let (xn, yn) = (
+                2.0 * (x as f64 + 0.5) / cw as f64 - 1.0,
+                2.0 * (y as f64 + 0.5) / ch as f64 - 1.0,
+            );
+            let want = surf(xn, yn);
+            assert!(
+                (fitted[y * cw + x][0] as f64 - want).abs() < 2e-4,
+                "({x},{y})"
+            );
+            assert!(
+                (fitted[y * cw + x][2] as f64 - 0.25 * want).abs() < 1e-4,
+                "({x},{y})"
+            );
+        }
+    }
+
     /// The cloth under a lamp that falls off by half across the photo (one ball-coloured blob so
     /// that the signal has a colour): `illumination` follows the lamp to a percent, which is
     /// what the time arrows divide the balls' light by.

@@ -100,7 +100,7 @@ impl AnalysisOptions {
     /// (J_z t - J_t z)` and `v* = (5/7) v + (2/7) R ω × z = (5/7)((J_n + J_z) n + J_t t)/m`, so
     /// `tan theta2 = J_t / (J_n + J_z)`, largest at `J_z = -mu² J_n`: `tan theta2 ≤ mu / √(1 -
     /// mu²)`, i.e. `|theta2| ≤ asin(mu)`. The synthetic truth reaches it (billiard, `mu` 0.07:
-    /// 4.01° on the 35 sets of sessions 25–27, `asin 0.07` = 4.01°).
+    /// 4.01° over 32 sets of session 27, `asin 0.07` = 4.01°).
     pub fn throw_max_deg(&self) -> f64 {
         self.ball_friction_max
             .map_or(OBJECT_THROW_MAX_DEG, |mu| {

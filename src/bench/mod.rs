@@ -1,5 +1,6 @@
 //! `streakfit bench speed-error`: what each unit of speed costs in accuracy; `streakfit bench
-//! psi-bound`: the best accuracy of `psi` that synthetic photos allow ([`crate::synth::bound`]).
+//! psi-bound`: the best accuracy of `psi` that synthetic photos allow ([`crate::synth::bound`]);
+//! `streakfit bench stability`: the extractor's decision noise ([`stability`]).
 //!
 //! On a pinned (seeded) synthetic set with ground truth, every cost knob of a stage is swept and
 //! each setting's seconds per item and angle errors are recorded:
@@ -16,6 +17,8 @@
 //! Writes `OUT/speed_error.csv` (`stage, setting, is_default, seconds_per_item, median_err_deg,
 //! median_err_sd_deg, p90_err_deg, ok_fraction, n_items, on_pareto_front`) and a Pareto plot
 //! `OUT/pareto.png|svg` (time against median error per stage, default marked).
+
+pub mod stability;
 
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::physics::{Coefficients, RegimeChoice, Shot, closed, impulse};
@@ -38,6 +41,9 @@ pub enum BenchKind {
     /// The Cramér–Rao bound of psi for the photos that `synth` writes with the same flags:
     /// OUT/psi_bound.csv and a summary (no photo is written).
     PsiBound(PsiBoundArgs),
+    /// How far the extractor's readings move when its input moves far less than the sensor's
+    /// noise: status, path-model and angle changes, and misreadings per run against truth.csv.
+    Stability(stability::StabilityArgs),
 }
 
 #[derive(Debug, Args, Clone)]
@@ -1036,6 +1042,7 @@ pub fn psi_bound_figure(
 pub fn run(args: &BenchArgs) -> CliResult {
     match &args.kind {
         BenchKind::PsiBound(a) => psi_bound(a),
+        BenchKind::Stability(a) => stability::run(a),
         BenchKind::SpeedError(a) => {
             let rows = speed_error(a)?;
             println!(
