@@ -937,3 +937,42 @@ fn the_overlay_draws_the_arc_that_gives_delta1() {
     });
     assert!(orange, "no arc drawn at {mid:?}");
 }
+
+/// `bench stability` reads a folder as `extract` does: its decoded run's table is `extract`'s
+/// (every column but `seconds`), each perturbed run gives a row per photo, and the summary counts
+/// them. Three clean photos with their plate at 1200×800, one perturbation.
+#[test]
+fn the_stability_bench_reads_as_extract_does() {
+    let dir = scratch("stability");
+    synth(&dir, "clean", 3, 5, &["--background"]);
+    let (_, rows) = extract_errors(&dir, 3, &[]);
+    let out = dir.join("stability");
+    let o = Command::new(bin())
+        .args(["bench", "stability"])
+        .arg(&dir)
+        .args(["--perturbations", "1", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        text.starts_with("3 photos, 3 perturbed analyses (each decoded value ± 1e-6"),
+        "{text}"
+    );
+    assert!(text.contains("\ndecoded "), "{text}");
+    let decoded = read_angle_table(&out.join("run_0.csv")).unwrap();
+    let mut want = rows.clone();
+    for r in want.iter_mut() {
+        r.seconds = 0.0;
+    }
+    assert_eq!(decoded, want);
+    let perturbed = read_angle_table(&out.join("run_1.csv")).unwrap();
+    assert_eq!(perturbed.len(), 3);
+    assert!(!out.join("run_2.csv").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
