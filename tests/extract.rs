@@ -965,13 +965,13 @@ fn the_stability_bench_reads_as_extract_does() {
         "{text}"
     );
     assert!(text.contains("\ndecoded "), "{text}");
-    let decoded = read_angle_table(&out.join("run_0.csv")).unwrap();
-    let mut want = rows.clone();
+    let decoded = read_angle_table(out.join("run_0.csv")).unwrap();
+    let mut want = rows;
     for r in want.iter_mut() {
         r.seconds = 0.0;
     }
     assert_eq!(decoded, want);
-    let perturbed = read_angle_table(&out.join("run_1.csv")).unwrap();
+    let perturbed = read_angle_table(out.join("run_1.csv")).unwrap();
     assert_eq!(perturbed.len(), 3);
     assert!(!out.join("run_2.csv").exists());
     let _ = std::fs::remove_dir_all(&dir);
