@@ -28,6 +28,7 @@ use crate::vision::{AnalysisOptions, Cloth, analyse, image_io};
 use clap::Args;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
+use std::collections::HashMap;
 use std::path::PathBuf;
 
 #[derive(Debug, Args, Clone)]
@@ -236,17 +237,23 @@ fn perturbed(img: &image_io::RgbImage, amplitude: f64, seed: u64) -> image_io::R
     }
 }
 
-/// The true angles of `file` from `truth.csv` beside it, if there is one.
-fn truth_of(dir: &std::path::Path, file: &str) -> Option<[Option<f64>; 5]> {
-    let text = std::fs::read_to_string(dir.join("truth.csv")).ok()?;
-    let rows = crate::synth::truth::read_csv(&text).ok()?;
-    let row = rows
-        .iter()
-        .find(|r| r.get("file").map(String::as_str) == Some(file))?;
-    Some(ANGLES.map(|k| {
-        row.get(&format!("{k}_deg"))
-            .and_then(|v| v.parse::<f64>().ok())
-    }))
+/// The true angles per file of the `truth.csv` in `dir`, if there is one.
+fn truth_in(dir: &std::path::Path) -> HashMap<String, [Option<f64>; 5]> {
+    let Ok(text) = std::fs::read_to_string(dir.join("truth.csv")) else {
+        return HashMap::new();
+    };
+    let Ok(rows) = crate::synth::truth::read_csv(&text) else {
+        return HashMap::new();
+    };
+    rows.iter()
+        .filter_map(|row| {
+            let angles = ANGLES.map(|k| {
+                row.get(&format!("{k}_deg"))
+                    .and_then(|v| v.parse::<f64>().ok())
+            });
+            Some((row.get("file")?.clone(), angles))
+        })
+        .collect()
 }
 
 /// Seed of perturbation `k` of `file`: FNV-1a of the name, then `k`.
@@ -272,6 +279,11 @@ pub fn run(args: &StabilityArgs) -> CliResult {
     let base = AnalysisOptions::default();
     let friction = ball_friction_bounds(&jobs);
     let textures = pool.install(|| folder_textures(&jobs, &jobs, base.coarse_side, false));
+    let mut truths: HashMap<PathBuf, HashMap<String, [Option<f64>; 5]>> = HashMap::new();
+    for j in &jobs {
+        let dir = folder_of(j);
+        truths.entry(dir.clone()).or_insert_with(|| truth_in(&dir));
+    }
     let photos: Vec<Photo> = pool.install(|| {
         jobs.par_iter()
             .filter_map(|j| {
@@ -299,7 +311,10 @@ pub fn run(args: &StabilityArgs) -> CliResult {
                 }
                 Some(Photo {
                     runs,
-                    truth: truth_of(&folder_of(j), &j.file),
+                    truth: truths
+                        .get(&folder_of(j))
+                        .and_then(|t| t.get(&j.file))
+                        .copied(),
                 })
             })
             .collect()
