@@ -2,9 +2,10 @@
 //! less than the sensor's noise (its decision noise).
 //!
 //! Each photo is analysed as decoded and with `K` perturbations: every decoded value (0..1) plus
-//! uniform noise of ±`amplitude` (default 1e-6, 1/4000 of an 8-bit grey level, some 1/1000 of
-//! the synthetic sets' sensor noise), seeded by the file name and the perturbation's number. A
-//! continuous estimate moves by about `amplitude / noise` of its sigma under such a change;
+//! uniform noise of ±`amplitude` (default 1e-6, 1/4000 of an 8-bit grey level, where the
+//! synthetic sets' sensor noise is a grey level or more), seeded by the file name and the
+//! perturbation's number. A continuous estimate moves by at most about `amplitude / noise` of
+//! its sigma under such a change;
 //! what moves more is a discrete decision: which samples are inliers, which path model wins,
 //! where a walk stops, which reading of the streaks is taken. Reported over all photos:
 //! - status changes (`ok`, `declined`, `error`) of the perturbed analyses;
