@@ -306,9 +306,18 @@ pub fn run(args: &StabilityArgs) -> CliResult {
                         &analyse(img, cloth, j.scene.ball_radius_px_cloth(), &opts),
                     )
                 };
-                let mut runs = vec![run(&img)];
-                for k in 1..=args.perturbations {
-                    runs.push(run(&perturbed(&img, args.amplitude, seed(&j.file, k))));
+                // `STREAKFIT_DEBUG`'s per-photo header, as `extract` prints it, with the run.
+                let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+                let mut runs = Vec::with_capacity(args.perturbations + 1);
+                for k in 0..=args.perturbations {
+                    if debug {
+                        eprintln!("== {} (run {k})", j.file);
+                    }
+                    runs.push(if k == 0 {
+                        run(&img)
+                    } else {
+                        run(&perturbed(&img, args.amplitude, seed(&j.file, k)))
+                    });
                 }
                 Some(Photo {
                     runs,
