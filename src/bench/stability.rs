@@ -272,6 +272,9 @@ pub fn run(args: &StabilityArgs) -> CliResult {
     if args.perturbations == 0 {
         return Err(CliError::usage("--perturbations: must be at least 1"));
     }
+    if args.jobs == Some(0) {
+        return Err(CliError::usage("--jobs: must be at least 1"));
+    }
     let jobs = list_jobs(&args.dirs)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.jobs.unwrap_or(0))
