@@ -378,6 +378,19 @@ pub fn ball_friction_bounds(jobs: &[Job]) -> HashMap<String, f64> {
         .collect()
 }
 
+/// The background plates the jobs name, each decoded once, to be shared by its photos.
+pub fn decode_plates(jobs: &[Job]) -> HashMap<PathBuf, Result<Arc<RgbImage>, String>> {
+    let mut plates = HashMap::new();
+    for p in jobs.iter().filter_map(|j| j.plate.as_ref()) {
+        plates.entry(p.clone()).or_insert_with(|| {
+            image_io::load(p)
+                .map(Arc::new)
+                .map_err(|e| format!("background plate '{}': {e}", p.display()))
+        });
+    }
+    plates
+}
+
 /// `base` with the friction bound of the job's material ([`ball_friction_bounds`]).
 pub fn job_options(
     job: &Job,
@@ -423,18 +436,7 @@ pub fn run(args: &ExtractArgs) -> CliResult {
             ))
         })?;
     }
-    // Plates are decoded once each and shared.
-    let mut plates: HashMap<PathBuf, Result<Arc<RgbImage>, String>> = HashMap::new();
-    for j in &jobs {
-        if let Some(p) = &j.plate
-            && !plates.contains_key(p)
-        {
-            let v = image_io::load(p)
-                .map(Arc::new)
-                .map_err(|e| format!("background plate '{}': {e}", p.display()));
-            plates.insert(p.clone(), v);
-        }
-    }
+    let plates = decode_plates(&jobs);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.jobs.unwrap_or(0))
         .build()

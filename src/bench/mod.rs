@@ -462,11 +462,7 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             let mut a = None;
             for _ in 0..3 {
                 let start = Instant::now();
-                let cloth = match (plate, texture) {
-                    (Some(p), _) => Cloth::Plate(p),
-                    (None, Some(t)) => Cloth::Texture(t),
-                    (None, None) => Cloth::Surface,
-                };
+                let cloth = Cloth::of(plate.as_ref(), texture.as_deref());
                 let r = analyse(img, cloth, *scale_r, &opts);
                 best = best.min(start.elapsed().as_secs_f64());
                 a = Some(r);

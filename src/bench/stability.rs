@@ -22,7 +22,7 @@
 
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::extract::{
-    ball_friction_bounds, folder_of, folder_textures, job_options, list_jobs, row_of,
+    ball_friction_bounds, decode_plates, folder_of, folder_textures, job_options, list_jobs, row_of,
 };
 use crate::table::{ShotRow, Status, write_angle_table};
 use crate::vision::{AnalysisOptions, Cloth, analyse, image_io};
@@ -283,6 +283,7 @@ pub fn run(args: &StabilityArgs) -> CliResult {
     let base = AnalysisOptions::default();
     let friction = ball_friction_bounds(&jobs);
     let textures = pool.install(|| folder_textures(&jobs, &jobs, base.coarse_side, false));
+    let plates = decode_plates(&jobs);
     let mut truths: HashMap<PathBuf, HashMap<String, [Option<f64>; 5]>> = HashMap::new();
     for j in &jobs {
         let dir = folder_of(j);
@@ -292,18 +293,14 @@ pub fn run(args: &StabilityArgs) -> CliResult {
         jobs.par_iter()
             .filter_map(|j| {
                 let img = image_io::load(&j.path).ok()?;
-                let plate = match &j.plate {
-                    Some(p) => Some(image_io::load(p).ok()?),
+                let plate = match j.plate.as_ref().and_then(|p| plates.get(p)) {
+                    Some(Ok(p)) => Some(p.as_ref()),
+                    Some(Err(_)) => return None,
                     None => None,
                 };
                 let opts = job_options(j, &base, &friction);
-                let texture = textures.get(&folder_of(j));
+                let cloth = Cloth::of(plate, textures.get(&folder_of(j)).map(|t| t.as_ref()));
                 let run = |img: &image_io::RgbImage| {
-                    let cloth = match (&plate, texture) {
-                        (Some(p), _) => Cloth::Plate(p),
-                        (None, Some(t)) => Cloth::Texture(t),
-                        (None, None) => Cloth::Surface,
-                    };
                     row_of(
                         j,
                         &analyse(img, cloth, j.scene.ball_radius_px_cloth(), &opts),

@@ -1320,7 +1320,7 @@ fn summarise(
         for k in 0..4 {
             fit_deg[k] = pred[k].map(f64::to_degrees);
             if let (Some(m), Some(p)) = (s.meas[k], pred[k]) {
-                let d = problem::wrap(p - m);
+                let d = crate::physics::wrap(p - m);
                 res_deg[k] = Some(d.to_degrees());
                 resid[k + 1].push(d.to_degrees());
                 max_pull = max_pull.max(pulls[k].abs());

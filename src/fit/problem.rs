@@ -18,6 +18,7 @@
 //! and the angles are independent. Marginalising `a` gives each photo's angles the covariance
 //! `diag(sigma_k²) + sigma_a² 1 1ᵀ`; the dof are unchanged (one residual, one parameter).
 
+use crate::physics::wrap;
 use crate::physics::{Coefficients, Regime, Shot, closed};
 
 /// Number of global parameters (e, mu, mu_table, mu_static).
@@ -95,20 +96,6 @@ pub fn coefficients(g: &[f64; NG]) -> Coefficients {
         mu_table: g[2],
         mu_static: g[3],
     }
-}
-
-/// Wraps an angle difference into `(-pi, pi]`.
-pub fn wrap(a: f64) -> f64 {
-    let two_pi = std::f64::consts::TAU;
-    // A difference of two principal angles is within (-2 pi, 2 pi), where the remainder is the
-    // identity: skipping it gives the same value (the remainder took ~6 % of a fit's time).
-    let mut x = if a.abs() < two_pi { a } else { a % two_pi };
-    if x > std::f64::consts::PI {
-        x -= two_pi;
-    } else if x <= -std::f64::consts::PI {
-        x += two_pi;
-    }
-    x
 }
 
 /// Normalised residuals of one shot (see the module doc).

@@ -500,6 +500,18 @@ pub enum Cloth<'a> {
     Texture(&'a ClothTexture),
 }
 
+impl<'a> Cloth<'a> {
+    /// The plate where there is one, else the folder's texture where there is one, else the
+    /// photo's own surface.
+    pub fn of(plate: Option<&'a RgbImage>, texture: Option<&'a ClothTexture>) -> Cloth<'a> {
+        match (plate, texture) {
+            (Some(p), _) => Cloth::Plate(p),
+            (None, Some(t)) => Cloth::Texture(t),
+            (None, None) => Cloth::Surface,
+        }
+    }
+}
+
 /// The cloth model a signal was built with (a column of the angle table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ClothModel {

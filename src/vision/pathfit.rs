@@ -31,6 +31,7 @@
 //! independent information only.
 
 use super::streak::Sample;
+use crate::physics::wrap;
 use nalgebra::{DMatrix, DVector};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -515,10 +516,7 @@ impl JointFit {
         } else {
             (self.m2, self.ball2_offset())
         };
-        Some(match m {
-            PathModel::Line => (off, off),
-            PathModel::ParabolaLine => (off, off + 1),
-        })
+        Some(angle_slots(m, off))
     }
     /// Standard error of ball `ball`'s (1 or 2) start tangent: for a parabola its profile-widened
     /// variance. A straight path does not measure its start tangent (it states `delta = theta`,
@@ -540,6 +538,15 @@ impl JointFit {
         } else {
             f64::INFINITY
         }
+    }
+}
+
+/// Indices of (delta, theta) of a ball's path of model `m` whose parameters start at `off`: a
+/// straight path's one direction is both.
+fn angle_slots(m: PathModel, off: usize) -> (usize, usize) {
+    match m {
+        PathModel::Line => (off, off),
+        PathModel::ParabolaLine => (off, off + 1),
     }
 }
 
@@ -1387,24 +1394,14 @@ fn average_models(
     if fitted.len() < 2 {
         return;
     }
-    let theta = |m: PathModel, off: usize| match m {
-        PathModel::Line => off,
-        PathModel::ParabolaLine => off + 1,
-    };
     let off2 = 5 + win.0.map_or(0, |m| m.n_params());
     let mut idx: Vec<usize> = (0..5).collect();
     if let Some(m) = win.0 {
-        idx.push(theta(m, 5));
+        idx.push(angle_slots(m, 5).1);
     }
-    idx.push(theta(win.1, off2));
+    idx.push(angle_slots(win.1, off2).1);
     // Angles (alpha, psi, thetas) differ modulo a turn.
-    let wrap = |i: usize, d: f64| {
-        if i >= 3 {
-            (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
-        } else {
-            d
-        }
-    };
+    let diff = |i: usize, d: f64| if i >= 3 { wrap(d) } else { d };
     let b_min = fitted.iter().map(|f| f.0).fold(f64::INFINITY, f64::min);
     let w: Vec<f64> = fitted
         .iter()
@@ -1416,7 +1413,7 @@ fn average_models(
         .iter()
         .map(|(_, xs, c)| {
             let xc = convert(xs, *c, win, x[2]);
-            idx.iter().map(|&i| wrap(i, xc[i] - x[i])).collect()
+            idx.iter().map(|&i| diff(i, xc[i] - x[i])).collect()
         })
         .collect();
     let mean: Vec<f64> = (0..idx.len())

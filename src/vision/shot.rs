@@ -34,6 +34,7 @@ use super::image_io::RgbImage;
 use super::linefit;
 use super::pathfit::{self, JointFit, Problem};
 use super::streak::{self, KeepOut, Sample};
+use crate::physics::wrap;
 use crate::table::Status;
 use rand::{Rng, SeedableRng};
 
@@ -262,16 +263,6 @@ impl Analysis {
             cloth: None,
         }
     }
-}
-
-fn wrap(a: f64) -> f64 {
-    let mut a = a % std::f64::consts::TAU;
-    if a > std::f64::consts::PI {
-        a -= std::f64::consts::TAU;
-    } else if a <= -std::f64::consts::PI {
-        a += std::f64::consts::TAU;
-    }
-    a
 }
 
 /// A straight line through samples: point, unit direction (from the first towards the last
