@@ -1871,6 +1871,15 @@ fn read_body(
             &ex,
             colours[a],
         );
+        if debug {
+            let mut sg: Vec<f32> = m.iter().map(|q| q.sigma as f32).collect();
+            eprintln!(
+                "remeasure streak {a}: {} raw samples -> {} (median sigma {:.3} px)",
+                raw[a].len(),
+                m.len(),
+                background::median(&mut sg)
+            );
+        }
         if m.len() >= 5 {
             measured[a] = m;
         }
