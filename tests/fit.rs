@@ -577,3 +577,29 @@ fn a_table_without_spin_that_rolling_shots_cannot_explain_says_so() {
     );
     assert!(f.chi2_reduced < 2.0, "chi²/dof {}", f.chi2_reduced);
 }
+
+/// The demo's rubber campaign as session 27's extractor read it (`tests/data`, its 33 `ok` rows):
+/// nearly every shot sticks, and shot_016 (psi 75.7°) and shot_029 (79.2°) lie beyond `psi_L`
+/// (75.3°, Eq. 50 with `mu0 = mu = 0.6`, `e = 0.88`). The two-regime threshold profile was
+/// once swept only upwards from a single sticking shot, and its warm starts carried that gross-
+/// slip valley to every threshold: chi² 150,000 with `e` 0.91, `s–mu` chosen, and shot_029
+/// rejected as a 33-sigma outlier. Swept both ways it finds chi² 31 and keeps every shot.
+#[test]
+fn the_slipping_shots_of_the_demos_rubber_campaign_give_the_two_regime_model() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/rubber_demo_session27.csv"
+    );
+    let rows = streakfit::table::read_angle_table(path).unwrap();
+    let f = fit_one(&rows, &FitOptions::default());
+    assert_eq!(f.model, "two-regime", "{:?}", f.scores);
+    assert_eq!(f.n_rejected, 0);
+    assert!(f.chi2 < 100.0, "chi² {}", f.chi2);
+    assert!((f.e.unwrap() - 0.88).abs() < 0.002, "e {:?}", f.e);
+    assert!((f.mu.unwrap() - 0.60).abs() < 0.005, "mu {:?}", f.mu);
+    let psi_l = f.psi_l_deg.unwrap();
+    assert!(
+        (75.7..79.2).contains(&psi_l),
+        "psi_L {psi_l} between the two slipping shots' psi"
+    );
+}

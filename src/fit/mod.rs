@@ -720,21 +720,30 @@ fn fit_two_regime(
     let mut profile: BTreeMap<usize, f64> = BTreeMap::new();
     let best_state: State;
     if n <= 60 {
-        let mut state = State {
-            g: g0,
-            l: l0.to_vec(),
-        };
+        // Neighbouring thresholds differ by one shot: each is warm-started from the previous
+        // one, in two sweeps, up from one sticking shot and down from all but one, and each
+        // threshold keeps the better. One sweep alone carries the valley of its first
+        // thresholds along: a rubber campaign whose shots nearly all stick, swept up from one
+        // sticking shot, had ended at chi² 150,000 with `e` 0.91 where the down sweep finds 40.
         let mut best: Option<(f64, State)> = None;
-        for k in lo_k..=hi_k {
-            // Neighbouring thresholds differ by one shot: warm start from the previous one.
-            let sol =
-                problem(shots, regimes_for(k), model, opts).solve(state.clone(), PROFILE_ITER);
-            profile.insert(k, sol.cost);
-            if best.as_ref().is_none_or(|b| sol.cost < b.0) {
-                best = Some((sol.cost, sol.state.clone()));
+        let mut sweep = |ks: Vec<usize>| {
+            let mut state = State {
+                g: g0,
+                l: l0.to_vec(),
+            };
+            for k in ks {
+                let sol =
+                    problem(shots, regimes_for(k), model, opts).solve(state.clone(), PROFILE_ITER);
+                let entry = profile.entry(k).or_insert(f64::INFINITY);
+                *entry = entry.min(sol.cost);
+                if best.as_ref().is_none_or(|b| sol.cost < b.0) {
+                    best = Some((sol.cost, sol.state.clone()));
+                }
+                state = sol.state;
             }
-            state = sol.state;
-        }
+        };
+        sweep((lo_k..=hi_k).collect());
+        sweep((lo_k..=hi_k).rev().collect());
         best_state = best?.1;
     } else {
         let huber = match opts.loss {
