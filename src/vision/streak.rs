@@ -1199,21 +1199,20 @@ pub fn remeasure(
             }
             break;
         };
-        let fitted: Vec<Measured> = entries
-            .iter()
+        let before = entries.len();
+        entries = entries
+            .into_iter()
             .filter_map(|(p, d, pr, pc)| {
-                let f = tpl.fit(pr, pc.c, r, n_a)?;
-                (f.c.abs() < 0.3 * r).then(|| (*p, *d, pr.clone(), f))
+                let f = tpl.fit(&pr, pc.c, r, n_a)?;
+                (f.c.abs() < 0.3 * r).then_some((p, d, pr, f))
             })
             .collect();
         if std::env::var_os("STREAKFIT_DEBUG").is_some() {
             eprintln!(
-                "remeasure: template round {_round} fits {} of {} profiles",
-                fitted.len(),
+                "remeasure: template round {_round} fits {} of {before} profiles",
                 entries.len()
             );
         }
-        entries = fitted;
     }
     entries
         .into_iter()
