@@ -626,6 +626,54 @@ fn a_drawn_cue_balls_way_back_is_not_read_as_the_incoming_streak() {
     );
 }
 
+/// A rolling cue ball at psi 13.5° (clean seed 101 shot_008, with its plate) leaves P at 42° and
+/// stops about three radii away: its short path is not found as a streak, and no ball rests at
+/// P. Until session 28 every such two-streak reading was declined ("the cue ball's path is
+/// hidden"); the incoming line and the object ball's path place the impact without it, and the
+/// row is read with `theta1` and `delta1` undefined and the reason. Measured 2026-11-27: psi
+/// 13.500° ± 0.028° (true 13.454°), `theta2` 1.022° ± 0.026° (true 1.001°).
+#[test]
+fn a_shot_whose_cue_ball_path_is_not_found_reads_psi_and_theta2() {
+    let dir = scratch("path_not_found");
+    synth(
+        &dir,
+        "clean",
+        8,
+        101,
+        &["--background", "--size", "2400x1600"],
+    );
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        if name.starts_with("shot_") && name != "shot_008.png" {
+            std::fs::remove_file(&p).unwrap();
+        }
+    }
+    let out = dir.join("angles.csv");
+    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = read_angle_table(&out).unwrap();
+    let t = truth(&dir);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(rows.len(), 1, "{rows:#?}");
+    let r = &rows[0];
+    assert_eq!(r.status, Status::Ok, "{r:#?}");
+    assert!(r.reason.starts_with("cue ball's path not found"), "{r:#?}");
+    assert_eq!((r.theta1_deg, r.delta1_deg), (None, None), "{r:#?}");
+    let tr = &t["shot_008.png"];
+    let want = |k: &str| tr[k].parse::<f64>().unwrap();
+    let (psi, psi_sd) = (r.psi_deg.unwrap(), r.psi_err_deg.unwrap());
+    let (t2, t2_sd) = (r.theta2_deg.unwrap(), r.theta2_err_deg.unwrap());
+    assert!(
+        (psi - want("psi_deg")).abs() < 0.1 && psi_sd < 0.1,
+        "{r:#?}"
+    );
+    assert!(
+        (t2 - want("theta2_deg")).abs() < 0.1 && t2_sd < 0.1,
+        "{r:#?}"
+    );
+}
+
 /// A stunned cue ball at psi 25–32° leaves P across the object ball's line and stops a few radii
 /// away: its short streak lies wholly within the wide margin the scene reading keeps around the
 /// other streaks, and was dropped (the shot declined as "only two streaks"; 4 of these 6 without
