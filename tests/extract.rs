@@ -94,6 +94,18 @@ fn one_of_24(
     (shot, t)
 }
 
+/// Removes every photo of a synthetic folder but `file` (each shot draws from its own stream, so
+/// the one left is the same photo as in the full set; the plate and `scene.toml` stay).
+fn keep_only(dir: &Path, file: &str) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        if name.starts_with("shot_") && name != file {
+            std::fs::remove_file(&p).unwrap();
+        }
+    }
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -604,13 +616,7 @@ fn a_drawn_cue_balls_way_back_is_not_read_as_the_incoming_streak() {
             "2400x1600",
         ],
     );
-    for e in std::fs::read_dir(&dir).unwrap() {
-        let p = e.unwrap().path();
-        let name = p.file_name().unwrap().to_string_lossy().to_string();
-        if name.starts_with("shot_") && name != "shot_006.png" {
-            std::fs::remove_file(&p).unwrap();
-        }
-    }
+    keep_only(&dir, "shot_006.png");
     let out = dir.join("angles.csv");
     let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
     assert!(o.status.code().is_some(), "extract crashed");
@@ -642,13 +648,7 @@ fn a_shot_whose_cue_ball_path_is_not_found_reads_psi_and_theta2() {
         101,
         &["--background", "--size", "2400x1600"],
     );
-    for e in std::fs::read_dir(&dir).unwrap() {
-        let p = e.unwrap().path();
-        let name = p.file_name().unwrap().to_string_lossy().to_string();
-        if name.starts_with("shot_") && name != "shot_008.png" {
-            std::fs::remove_file(&p).unwrap();
-        }
-    }
+    keep_only(&dir, "shot_008.png");
     let out = dir.join("angles.csv");
     let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
