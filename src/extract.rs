@@ -257,14 +257,15 @@ pub fn process(
                     r.seconds = t0.elapsed().as_secs_f64();
                     return r;
                 }
-                Some(Ok(p)) => Cloth::Plate(p.as_ref()),
-                None => texture.map_or(Cloth::Surface, Cloth::Texture),
+                Some(Ok(p)) => Some(p.as_ref()),
+                None => None,
             };
+            let cloth = Cloth::of(plate_img, texture);
             if std::env::var_os("STREAKFIT_DEBUG").is_some() {
                 eprintln!("== {}", job.file);
             }
             let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                analyse(&img, plate_img, job.scene.ball_radius_px_cloth(), opts)
+                analyse(&img, cloth, job.scene.ball_radius_px_cloth(), opts)
             }));
             match res {
                 Err(_) => ShotRow::failed(

@@ -495,7 +495,7 @@ impl JointFit {
         5
     }
     pub fn ball2_offset(&self) -> usize {
-        5 + self.m1.map_or(0, |m| m.n_params())
+        object_offset(self.m1)
     }
     pub fn geom1(&self) -> Option<PathGeom> {
         self.m1
@@ -539,6 +539,12 @@ impl JointFit {
             f64::INFINITY
         }
     }
+}
+
+/// Index of the object ball's first path parameter, after the shared five and the cue ball's
+/// path of model `m1` (none when it stops).
+fn object_offset(m1: Option<PathModel>) -> usize {
+    5 + m1.map_or(0, |m| m.n_params())
 }
 
 /// Indices of (delta, theta) of a ball's path of model `m` whose parameters start at `off`: a
@@ -616,7 +622,7 @@ impl std::ops::IndexMut<(usize, usize)> for Jac {
 /// Columns (ascending) that residual group `g` can depend on: priors all, incoming the shared
 /// five, the cue ball `O, R, α` and its own, the object ball `O, α` and its own.
 fn group_cols(m1: Option<PathModel>, m2: PathModel) -> [Vec<usize>; 4] {
-    let off2 = 5 + m1.map_or(0, |m| m.n_params());
+    let off2 = object_offset(m1);
     let k = off2 + m2.n_params();
     [
         (0..k).collect(),
@@ -678,10 +684,10 @@ fn normal_equations(
 
 impl Model<'_> {
     fn n_params(&self) -> usize {
-        5 + self.m1.map_or(0, |m| m.n_params()) + self.m2.n_params()
+        self.off2() + self.m2.n_params()
     }
     fn off2(&self) -> usize {
-        5 + self.m1.map_or(0, |m| m.n_params())
+        object_offset(self.m1)
     }
     fn ball1(&self) -> Option<(PathModel, &[Sample])> {
         Some((self.m1?, self.pb.out1.as_deref()?))
@@ -1394,7 +1400,7 @@ fn average_models(
     if fitted.len() < 2 {
         return;
     }
-    let off2 = 5 + win.0.map_or(0, |m| m.n_params());
+    let off2 = object_offset(win.0);
     let mut idx: Vec<usize> = (0..5).collect();
     if let Some(m) = win.0 {
         idx.push(angle_slots(m, 5).1);

@@ -1802,18 +1802,18 @@ fn read_body(
     // and leaving P across them. Without light at P it is the latter, and the reading is held to
     // a stricter psi below ([`HIDDEN_PATH_PSI_SD_MAX_DEG`], and [`HIDDEN_PATH_PSI_MIN_DEG`] as
     // for any path not found).
+    // The impact point of the reading (the cue ball's centre, 2R from O on the line of centres).
+    let p_imp = {
+        let x0 = &reading.x0;
+        (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin())
+    };
     let mut cue_at_rest = false;
-    let mut path_not_found = false;
-    if cue_stopped {
-        let x0 = &reading.x0;
-        let p = (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin());
+    let path_not_found = cue_stopped && {
         let ring = background::median(&mut ring_samples(sig, o, 1.6 * r, 64)) as f64;
-        path_not_found = !disc_at(sig, p, r, dsc.contrast, ring);
-    }
+        !disc_at(sig, p_imp, r, dsc.contrast, ring)
+    };
     if cue_stopped && !path_not_found {
-        let x0 = &reading.x0;
-        let p = (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin());
-        let rim = rim_at(sig, p, r) / dsc.contrast;
+        let rim = rim_at(sig, p_imp, r) / dsc.contrast;
         // The same light against the incoming streak's, which the same ball painted in the same
         // colour: the disc's contrast is another ball's, and a coloured ball resting at P shows
         // weakly along the photo's mean ball colour.
@@ -1841,10 +1841,6 @@ fn read_body(
     }
     // Re-measure every streak with the other balls' light (bands around their centre-lines, and
     // the object disc) excluded, and extend it towards its start as far as its core stays clean.
-    let p_imp = {
-        let x0 = &reading.x0;
-        (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin())
-    };
     let start_of = |i: usize| if i == reading.b2 { o } else { p_imp };
     let roles: Vec<usize> = [Some(reading.inc), reading.b1, Some(reading.b2)]
         .into_iter()

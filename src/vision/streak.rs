@@ -1188,12 +1188,13 @@ pub fn remeasure(
             entries.push((p, d, pr, pc));
         }
     }
-    for _round in 0..2 {
+    let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
+    for round in 0..2 {
         let refs: Vec<(&Profile, ProfileCentre)> = entries.iter().map(|e| (&e.2, e.3)).collect();
         let Some(tpl) = Template::estimate(&refs, r) else {
-            if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+            if debug {
                 eprintln!(
-                    "remeasure: no template from {} profiles (round {_round})",
+                    "remeasure: no template from {} profiles (round {round})",
                     refs.len()
                 );
             }
@@ -1207,9 +1208,9 @@ pub fn remeasure(
                 (f.c.abs() < 0.3 * r).then_some((p, d, pr, f))
             })
             .collect();
-        if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        if debug {
             eprintln!(
-                "remeasure: template round {_round} fits {} of {before} profiles",
+                "remeasure: template round {round} fits {} of {before} profiles",
                 entries.len()
             );
         }
