@@ -4,7 +4,9 @@
 //! Stages, in order: `synth` (per folder that has a `[folders.synth]` table: render the shots),
 //! `extract` (per folder: angles table + overlays), `fit` (all tables: coefficients per material
 //! with model selection), `report` (figures, `index.html`, `report.md`). Each stage's key is a
-//! BLAKE3 hash of the stage name, the streakfit version, the stage's settings (canonical JSON) and
+//! BLAKE3 hash of the stage name, the streakfit build ([`build_id`]: a digest of the running
+//! executable, so a rebuilt streakfit whose code changed recomputes every stage), the stage's
+//! settings (canonical JSON) and
 //! the content of its inputs (every file of an input folder, the tables, the fit, the materials
 //! file). The key is stored beside the stage's outputs (`.streakfit-stage.json`); a stage whose key
 //! is unchanged and whose outputs exist is skipped (`cached`). `--force` runs every stage.
@@ -575,11 +577,28 @@ impl Pipeline {
 /// Incremental BLAKE3 key of a stage.
 struct KeyHasher(blake3::Hasher);
 
+/// The running streakfit's identity in every stage key: its version and a BLAKE3 digest of its
+/// executable. Keyed on the version alone, a stage served the tables of whatever code had made
+/// them, so a changed extractor or fit went unseen until `--force` (which the README had to
+/// ask for after every change). Any rebuild that changes the machine code changes the digest.
+/// Read once per process (about 40 MB, some 20 ms); where the executable cannot be read the
+/// version alone stands, as before.
+pub fn build_id() -> &'static str {
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        let version = env!("CARGO_PKG_VERSION");
+        match std::env::current_exe().and_then(std::fs::read) {
+            Ok(bytes) => format!("{version}+{}", &blake3::hash(&bytes).to_hex()[..16]),
+            Err(_) => version.to_string(),
+        }
+    })
+}
+
 impl KeyHasher {
     fn new(stage: &str) -> Self {
         let mut h = blake3::Hasher::new();
         h.update(b"streakfit-stage\0");
-        h.update(env!("CARGO_PKG_VERSION").as_bytes());
+        h.update(build_id().as_bytes());
         h.update(b"\0");
         h.update(stage.as_bytes());
         h.update(b"\0");
@@ -1167,6 +1186,28 @@ pub fn run(args: &RunArgs) -> CliResult {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stage_keys_carry_a_digest_of_the_running_executable() {
+        let id = build_id();
+        let exe = std::fs::read(std::env::current_exe().unwrap()).unwrap();
+        let digest = blake3::hash(&exe).to_hex();
+        assert_eq!(
+            id,
+            format!("{}+{}", env!("CARGO_PKG_VERSION"), &digest[..16])
+        );
+        // The same build gives the same key; another build id would give another.
+        let key = |id: &str| {
+            let mut h = blake3::Hasher::new();
+            h.update(b"streakfit-stage\0");
+            h.update(id.as_bytes());
+            h.update(b"\0");
+            h.update(b"fit\0");
+            h.finalize().to_hex()[..32].to_string()
+        };
+        assert_eq!(KeyHasher::new("fit").hex(), key(id));
+        assert_ne!(KeyHasher::new("fit").hex(), key(env!("CARGO_PKG_VERSION")));
+    }
 
     const MINIMAL: &str = r#"
 name = "t"
