@@ -674,6 +674,62 @@ fn a_shot_whose_cue_ball_path_is_not_found_reads_psi_and_theta2() {
     );
 }
 
+/// A draw shot at psi 7.2° (spin −0.94): the cue ball's way back lies along the incoming streak
+/// and is not found as a streak of its own, and no ball rests at P. Read as a two-streak shot
+/// without the cue ball's path (session 28's rule), the way back's light pulls the incoming
+/// line: on session 28's code psi 13.38° ± 0.16° (true 7.23°) and `theta2` −3.63° ± 0.09°
+/// (true −0.78°), past the rules on psi (at least 12°, sigma at most 0.5°). The object ball's
+/// streak has 0.16 of the incoming streak's light, where a ball leaving no faster than the cue
+/// ball arrived has at least as much (`vision::shot::HIDDEN_PATH_LIGHT_MIN`, session 29): the
+/// shot is declined with that reason.
+#[test]
+fn a_drawn_cue_balls_way_back_along_the_incoming_streak_is_not_read_as_a_hidden_path() {
+    let dir = scratch("draw_way_back");
+    synth(
+        &dir,
+        "clean",
+        15,
+        904,
+        &[
+            "--psi",
+            "0:12",
+            "--spin-modes",
+            "mixed",
+            "--size",
+            "2400x1600",
+        ],
+    );
+    keep_only(&dir, "shot_015.png");
+    let out = dir.join("angles.csv");
+    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = read_angle_table(&out).unwrap();
+    let t = truth(&dir);
+    let _ = std::fs::remove_dir_all(&dir);
+    let tr = &t["shot_015.png"];
+    let want = |k: &str| tr[k].parse::<f64>().unwrap();
+    assert!(
+        (want("psi_deg") - 7.232).abs() < 0.01 && want("spin") < -0.9,
+        "{tr:?}"
+    );
+    assert_eq!(rows.len(), 1, "{rows:#?}");
+    let r = &rows[0];
+    assert_eq!(r.status, Status::Declined, "{r:#?}");
+    assert!(
+        r.reason
+            .contains("the cue ball's way back probably lies along the incoming streak"),
+        "{r:#?}"
+    );
+    let ratio: f64 = r
+        .reason
+        .split("streak has ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .expect("the light ratio in the reason");
+    assert!(ratio < 0.25, "{r:#?}");
+}
+
 /// A stunned cue ball at psi 25–32° leaves P across the object ball's line and stops a few radii
 /// away: its short streak lies wholly within the wide margin the scene reading keeps around the
 /// other streaks, and was dropped (the shot declined as "only two streaks"; 4 of these 6 without

@@ -931,6 +931,17 @@ const HIDDEN_PATH_PSI_MIN_DEG: f64 = 12.0;
 /// 31 px off a ball waiting in a head-on shot, psi read 14.4° for 3.3°).
 const HIDDEN_PATH_PSI_SD_MAX_DEG: f64 = 0.5;
 
+/// Smallest ratio of the object ball's streak light to the incoming streak's (the median
+/// amplitudes of their centre-line samples) in a reading with two streaks and no light at the
+/// impact point. The object ball leaves at `(1 + e)/2 · v cos psi`, at most the incoming speed,
+/// so its streak, whose light is the dwell `∝ 1/speed`, is at least as bright as the incoming
+/// one for balls of one colour (0.47–2.7 on the right readings of session 29's sets, colours and
+/// deceleration included). A drawn cue ball whose way back lies along the incoming streak
+/// brightens it several-fold, slow as it is: 0.13–0.15 on the three such readings of session
+/// 29's near head-on sets (psi 3–8°), one of which passed the psi rules at psi 12.5° ± 0.48°
+/// for 7.2° (clean seed 904 shot_015, `theta2` 3.3° off).
+const HIDDEN_PATH_LIGHT_MIN: f64 = 0.35;
+
 /// Smallest end-to-start speed ratio `L₁/L₀` of an object ball's fitted slide whose start
 /// tangent counts as measured. The model (`physics::impulse` and `physics::path`, rolling cue
 /// balls at psi 10–75°) ends the object ball's slide at 0.63–0.70 of its start speed for the
@@ -1906,6 +1917,14 @@ fn read_body(
     // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
     // the incoming streak when the real one is too faint to find).
     let inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
+    // The object ball's streak light against the incoming one's ([`HIDDEN_PATH_LIGHT_MIN`]).
+    let light_ratio = {
+        let median_amp = |i: usize| {
+            let mut a: Vec<f32> = measured[i].iter().map(|q| q.amp as f32).collect();
+            f64::from(background::median(&mut a))
+        };
+        median_amp(reading.b2) / median_amp(reading.inc)
+    };
     if let Some((arrow, _)) = inc
         && arrow > INCOMING_ARROW_MAX
     {
@@ -2151,6 +2170,13 @@ fn read_body(
                  is not found, and psi = {psi_deg:.1}° ± {:.2}° is too uncertain to read the \
                  shot without it (more than {HIDDEN_PATH_PSI_SD_MAX_DEG}°)",
                 deg(psi_sd)
+            ))
+        } else if path_not_found && light_ratio < HIDDEN_PATH_LIGHT_MIN {
+            Some(format!(
+                "only two streaks and no ball at rest at the impact point: the object ball's \
+                 streak has {light_ratio:.2} of the incoming streak's light (at least \
+                 {HIDDEN_PATH_LIGHT_MIN} for a ball leaving no faster than the cue ball \
+                 arrived): the cue ball's way back probably lies along the incoming streak"
             ))
         } else if !cue_at_rest && psi_deg < HIDDEN_PATH_PSI_MIN_DEG {
             Some(format!(
