@@ -912,10 +912,21 @@ const REST_RIM: f64 = 0.3;
 /// streak read as incoming (its own): psi 12° off at a stated 0.16°.
 const REST_OVER_STREAK: f64 = 3.0;
 
-/// Largest impact angle (degrees) at which a cue ball can stop at P: after an oblique impact
-/// it keeps its tangential speed `v sin psi`, and even at 3° (5 % of `v`) it rolls on for most
-/// of a ball diameter per 0.1 s.
+/// Largest impact angle (degrees) at which a cue ball can stop at P as a head-on stun shot's
+/// does, read without further checks: after an oblique impact it keeps its tangential speed
+/// `v sin psi`, and even at 3° (5 % of `v`) it rolls on for most of a ball diameter per 0.1 s.
 const STOP_PSI_MAX_DEG: f64 = 3.0;
+
+/// Largest impact angle (degrees) at which a cue ball may come to rest near P. A stunned cue
+/// ball leaves at `v sin psi` across the line of centres and rolls to rest within about a
+/// radius of P below some 10° (so the light at P shows a resting ball for most of the
+/// exposure), and a drawn one comes back towards it. Above [`STOP_PSI_MAX_DEG`] such a reading
+/// must pass the checks of a hidden path ([`HIDDEN_PATH_PSI_SD_MAX_DEG`],
+/// [`HIDDEN_PATH_LIGHT_MIN`]). Session 29's near head-on sets (psi 0–12°, mixed spin): of the 8
+/// readings between 3° and 12° that the 3° rule had declined, 6 right (psi within 2.1 sigma), a
+/// drawn cue ball's way back along the incoming streak (light ratio 0.07, psi 11.4° for 6.6°)
+/// and a psi known to 0.75° (5.8° for 1.7°), which the two checks decline.
+const REST_NEAR_P_PSI_MAX_DEG: f64 = 12.0;
 
 /// Smallest impact angle (degrees) at which a cue-ball path that was not found cannot bias the
 /// other two: below it a follow shot runs along the object ball's streak and a draw shot back
@@ -2158,25 +2169,33 @@ fn read_body(
     // Two streaks only: which story the light tells must agree with the impact angle.
     if cue_stopped {
         let psi_deg = deg(psi_s.abs());
-        let refuse = if cue_at_rest && psi_deg > STOP_PSI_MAX_DEG {
+        // A cue ball at rest near P after an oblique stun or draw shot: read like a hidden path.
+        let rest_oblique = cue_at_rest && psi_deg > STOP_PSI_MAX_DEG;
+        let story = if path_not_found {
+            "only two streaks and no ball at rest at the impact point"
+        } else {
+            "a ball rests near the impact point at an oblique impact"
+        };
+        let refuse = if cue_at_rest && psi_deg > REST_NEAR_P_PSI_MAX_DEG {
             Some(format!(
                 "a ball rests at the impact point although psi = {psi_deg:.1}° (a cue ball \
-                 stops only after a head-on stun shot): the resting balls are probably \
-                 misread (which one is the object ball?)"
+                 stops near P only after a stun or draw shot within {REST_NEAR_P_PSI_MAX_DEG}° \
+                 of head-on): the resting balls are probably misread (which one is the object \
+                 ball?)"
             ))
-        } else if path_not_found && deg(psi_sd) > HIDDEN_PATH_PSI_SD_MAX_DEG {
+        } else if (path_not_found || rest_oblique) && deg(psi_sd) > HIDDEN_PATH_PSI_SD_MAX_DEG {
             Some(format!(
-                "only two streaks and no ball at rest at the impact point: the cue ball's path \
-                 is not found, and psi = {psi_deg:.1}° ± {:.2}° is too uncertain to read the \
-                 shot without it (more than {HIDDEN_PATH_PSI_SD_MAX_DEG}°)",
+                "{story}: the cue ball's path is not found, and psi = {psi_deg:.1}° ± {:.2}° is \
+                 too uncertain to read the shot without it (more than \
+                 {HIDDEN_PATH_PSI_SD_MAX_DEG}°)",
                 deg(psi_sd)
             ))
-        } else if path_not_found && light_ratio < HIDDEN_PATH_LIGHT_MIN {
+        } else if (path_not_found || rest_oblique) && light_ratio < HIDDEN_PATH_LIGHT_MIN {
             Some(format!(
-                "only two streaks and no ball at rest at the impact point: the object ball's \
-                 streak has {light_ratio:.2} of the incoming streak's light (at least \
-                 {HIDDEN_PATH_LIGHT_MIN} for a ball leaving no faster than the cue ball \
-                 arrived): the cue ball's way back probably lies along the incoming streak"
+                "{story}: the object ball's streak has {light_ratio:.2} of the incoming streak's \
+                 light (at least {HIDDEN_PATH_LIGHT_MIN} for a ball leaving no faster than the \
+                 cue ball arrived): the cue ball's way back probably lies along the incoming \
+                 streak"
             ))
         } else if !cue_at_rest && psi_deg < HIDDEN_PATH_PSI_MIN_DEG {
             Some(format!(
@@ -2543,7 +2562,10 @@ fn read_body(
     if fit.m1.is_none() {
         notes.insert(
             0,
-            if cue_at_rest {
+            if cue_at_rest && deg(psi_s.abs()) > STOP_PSI_MAX_DEG {
+                "cue ball comes to rest near the impact (a stun or draw shot): delta1, theta1 \
+                 undefined"
+            } else if cue_at_rest {
                 "cue ball stops at the impact: delta1, theta1 undefined"
             } else {
                 "cue ball's path not found (hidden near the impact): delta1, theta1 undefined"
