@@ -106,6 +106,50 @@ fn keep_only(dir: &Path, file: &str) {
     }
 }
 
+/// The row of photo `file` extracted alone from a synthesised folder of `shots` full-size
+/// photos (`extra`: more `synth` flags), with that photo's truth; the folder is removed
+/// afterwards.
+fn only_photo(
+    name: &str,
+    tier: &str,
+    shots: usize,
+    seed: u64,
+    extra: &[&str],
+    file: &str,
+) -> (ShotRow, HashMap<String, String>) {
+    let dir = scratch(name);
+    let mut args = extra.to_vec();
+    args.extend(["--size", "2400x1600"]);
+    synth(&dir, tier, shots, seed, &args);
+    keep_only(&dir, file);
+    let out = dir.join("angles.csv");
+    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = read_angle_table(&out).unwrap();
+    let mut t = truth(&dir);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(rows.len(), 1, "{rows:#?}");
+    (rows.into_iter().next().unwrap(), t.remove(file).unwrap())
+}
+
+/// Asserts that `r` reads psi and `theta2` within 0.1° of the truth `tr` at stated sigmas under
+/// 0.1°, without the cue ball's path (`theta1`, `delta1` undefined).
+fn assert_psi_theta2_without_cue_path(r: &ShotRow, tr: &HashMap<String, String>) {
+    assert_eq!(r.status, Status::Ok, "{r:#?}");
+    assert_eq!((r.theta1_deg, r.delta1_deg), (None, None), "{r:#?}");
+    let want = |k: &str| tr[k].parse::<f64>().unwrap();
+    let (psi, psi_sd) = (r.psi_deg.unwrap(), r.psi_err_deg.unwrap());
+    let (t2, t2_sd) = (r.theta2_deg.unwrap(), r.theta2_err_deg.unwrap());
+    assert!(
+        (psi - want("psi_deg")).abs() < 0.1 && psi_sd < 0.1,
+        "{r:#?}"
+    );
+    assert!(
+        (t2 - want("theta2_deg")).abs() < 0.1 && t2_sd < 0.1,
+        "{r:#?}"
+    );
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -640,38 +684,16 @@ fn a_drawn_cue_balls_way_back_is_not_read_as_the_incoming_streak() {
 /// 13.500° ± 0.028° (true 13.454°), `theta2` 1.022° ± 0.026° (true 1.001°).
 #[test]
 fn a_shot_whose_cue_ball_path_is_not_found_reads_psi_and_theta2() {
-    let dir = scratch("path_not_found");
-    synth(
-        &dir,
+    let (r, tr) = only_photo(
+        "path_not_found",
         "clean",
         8,
         101,
-        &["--background", "--size", "2400x1600"],
+        &["--background"],
+        "shot_008.png",
     );
-    keep_only(&dir, "shot_008.png");
-    let out = dir.join("angles.csv");
-    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let rows = read_angle_table(&out).unwrap();
-    let t = truth(&dir);
-    let _ = std::fs::remove_dir_all(&dir);
-    assert_eq!(rows.len(), 1, "{rows:#?}");
-    let r = &rows[0];
-    assert_eq!(r.status, Status::Ok, "{r:#?}");
     assert!(r.reason.starts_with("cue ball's path not found"), "{r:#?}");
-    assert_eq!((r.theta1_deg, r.delta1_deg), (None, None), "{r:#?}");
-    let tr = &t["shot_008.png"];
-    let want = |k: &str| tr[k].parse::<f64>().unwrap();
-    let (psi, psi_sd) = (r.psi_deg.unwrap(), r.psi_err_deg.unwrap());
-    let (t2, t2_sd) = (r.theta2_deg.unwrap(), r.theta2_err_deg.unwrap());
-    assert!(
-        (psi - want("psi_deg")).abs() < 0.1 && psi_sd < 0.1,
-        "{r:#?}"
-    );
-    assert!(
-        (t2 - want("theta2_deg")).abs() < 0.1 && t2_sd < 0.1,
-        "{r:#?}"
-    );
+    assert_psi_theta2_without_cue_path(&r, &tr);
 }
 
 /// A stun shot at psi 11.4° (spin −0.08): the cue ball leaves P across the line of centres at
@@ -683,53 +705,25 @@ fn a_shot_whose_cue_ball_path_is_not_found_reads_psi_and_theta2() {
 /// 0.822°).
 #[test]
 fn a_stunned_cue_ball_resting_near_the_impact_is_read_without_its_path() {
-    let dir = scratch("rest_near_p");
-    synth(
-        &dir,
+    let (r, tr) = only_photo(
+        "rest_near_p",
         "clean",
         16,
         905,
-        &[
-            "--psi",
-            "0:12",
-            "--spin-modes",
-            "mixed",
-            "--size",
-            "2400x1600",
-        ],
+        &["--psi", "0:12", "--spin-modes", "mixed"],
+        "shot_016.png",
     );
-    keep_only(&dir, "shot_016.png");
-    let out = dir.join("angles.csv");
-    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let rows = read_angle_table(&out).unwrap();
-    let t = truth(&dir);
-    let _ = std::fs::remove_dir_all(&dir);
-    let tr = &t["shot_016.png"];
     let want = |k: &str| tr[k].parse::<f64>().unwrap();
     assert!(
         (want("psi_deg") - 11.381).abs() < 0.01 && want("spin").abs() < 0.1,
         "{tr:?}"
     );
-    assert_eq!(rows.len(), 1, "{rows:#?}");
-    let r = &rows[0];
-    assert_eq!(r.status, Status::Ok, "{r:#?}");
     assert!(
         r.reason
             .starts_with("cue ball comes to rest near the impact"),
         "{r:#?}"
     );
-    assert_eq!((r.theta1_deg, r.delta1_deg), (None, None), "{r:#?}");
-    let (psi, psi_sd) = (r.psi_deg.unwrap(), r.psi_err_deg.unwrap());
-    let (t2, t2_sd) = (r.theta2_deg.unwrap(), r.theta2_err_deg.unwrap());
-    assert!(
-        (psi - want("psi_deg")).abs() < 0.1 && psi_sd < 0.1,
-        "{r:#?}"
-    );
-    assert!(
-        (t2 - want("theta2_deg")).abs() < 0.1 && t2_sd < 0.1,
-        "{r:#?}"
-    );
+    assert_psi_theta2_without_cue_path(&r, &tr);
 }
 
 /// A draw shot at psi 7.2° (spin −0.94): the cue ball's way back lies along the incoming streak
@@ -742,36 +736,19 @@ fn a_stunned_cue_ball_resting_near_the_impact_is_read_without_its_path() {
 /// shot is declined with that reason.
 #[test]
 fn a_drawn_cue_balls_way_back_along_the_incoming_streak_is_not_read_as_a_hidden_path() {
-    let dir = scratch("draw_way_back");
-    synth(
-        &dir,
+    let (r, tr) = only_photo(
+        "draw_way_back",
         "clean",
         15,
         904,
-        &[
-            "--psi",
-            "0:12",
-            "--spin-modes",
-            "mixed",
-            "--size",
-            "2400x1600",
-        ],
+        &["--psi", "0:12", "--spin-modes", "mixed"],
+        "shot_015.png",
     );
-    keep_only(&dir, "shot_015.png");
-    let out = dir.join("angles.csv");
-    let o = extract(&[dir.as_os_str(), "--out".as_ref(), out.as_os_str()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let rows = read_angle_table(&out).unwrap();
-    let t = truth(&dir);
-    let _ = std::fs::remove_dir_all(&dir);
-    let tr = &t["shot_015.png"];
     let want = |k: &str| tr[k].parse::<f64>().unwrap();
     assert!(
         (want("psi_deg") - 7.232).abs() < 0.01 && want("spin") < -0.9,
         "{tr:?}"
     );
-    assert_eq!(rows.len(), 1, "{rows:#?}");
-    let r = &rows[0];
     assert_eq!(r.status, Status::Declined, "{r:#?}");
     assert!(
         r.reason
