@@ -882,6 +882,12 @@ fn time_arrow(sig: &Signal, samples: &[Sample], s: (f64, f64), r: f64) -> Option
     (a.abs() > 1e-12).then(|| (b / a.abs(), (s2 / sxx).sqrt() / a.abs()))
 }
 
+/// Median light (baseline-subtracted amplitude) of a streak's centre-line samples.
+fn median_amp(samples: &[Sample]) -> f64 {
+    let mut a: Vec<f32> = samples.iter().map(|q| q.amp as f32).collect();
+    f64::from(background::median(&mut a))
+}
+
 /// How many standard errors apart the object ball's and the incoming streak's time arrows
 /// ([`time_arrow`]) must lie for a head-on shot's two resting balls to be told apart. Measured
 /// (session 21, head-on stun shots at psi 0–1.5°): 5–11 on a clean set with a plate (8 shots);
@@ -1850,8 +1856,7 @@ fn read_body(
         // The same light against the incoming streak's, which the same ball painted in the same
         // colour: the disc's contrast is another ball's, and a coloured ball resting at P shows
         // weakly along the photo's mean ball colour.
-        let mut amps: Vec<f32> = kept[reading.inc].iter().map(|q| q.amp as f32).collect();
-        let inc_amp = f64::from(background::median(&mut amps));
+        let inc_amp = median_amp(&kept[reading.inc]);
         let over_streak = rim * dsc.contrast / inc_amp;
         cue_at_rest = rim >= REST_RIM || (inc_amp > 0.0 && over_streak >= REST_OVER_STREAK);
         if debug {
@@ -1930,14 +1935,6 @@ fn read_body(
     // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
     // the incoming streak when the real one is too faint to find).
     let inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
-    // The object ball's streak light against the incoming one's ([`HIDDEN_PATH_LIGHT_MIN`]).
-    let light_ratio = {
-        let median_amp = |i: usize| {
-            let mut a: Vec<f32> = measured[i].iter().map(|q| q.amp as f32).collect();
-            f64::from(background::median(&mut a))
-        };
-        median_amp(reading.b2) / median_amp(reading.inc)
-    };
     if let Some((arrow, _)) = inc
         && arrow > INCOMING_ARROW_MAX
     {
@@ -2168,11 +2165,14 @@ fn read_body(
         out.fit = Some(fit);
         return out;
     }
+    // A cue ball at rest near P after an oblique stun or draw shot: read like a hidden path.
+    let rest_oblique = cue_at_rest && deg(psi_s.abs()) > STOP_PSI_MAX_DEG;
     // Two streaks only: which story the light tells must agree with the impact angle.
     if cue_stopped {
         let psi_deg = deg(psi_s.abs());
-        // A cue ball at rest near P after an oblique stun or draw shot: read like a hidden path.
-        let rest_oblique = cue_at_rest && psi_deg > STOP_PSI_MAX_DEG;
+        let without_path = path_not_found || rest_oblique;
+        // The object ball's streak light against the incoming one's ([`HIDDEN_PATH_LIGHT_MIN`]).
+        let light_ratio = median_amp(&measured[reading.b2]) / median_amp(&measured[reading.inc]);
         let story = if path_not_found {
             "only two streaks and no ball at rest at the impact point"
         } else {
@@ -2185,14 +2185,14 @@ fn read_body(
                  of head-on): the resting balls are probably misread (which one is the object \
                  ball?)"
             ))
-        } else if (path_not_found || rest_oblique) && deg(psi_sd) > HIDDEN_PATH_PSI_SD_MAX_DEG {
+        } else if without_path && deg(psi_sd) > HIDDEN_PATH_PSI_SD_MAX_DEG {
             Some(format!(
                 "{story}: the cue ball's path is not found, and psi = {psi_deg:.1}° ± {:.2}° is \
                  too uncertain to read the shot without it (more than \
                  {HIDDEN_PATH_PSI_SD_MAX_DEG}°)",
                 deg(psi_sd)
             ))
-        } else if (path_not_found || rest_oblique) && light_ratio < HIDDEN_PATH_LIGHT_MIN {
+        } else if without_path && light_ratio < HIDDEN_PATH_LIGHT_MIN {
             Some(format!(
                 "{story}: the object ball's streak has {light_ratio:.2} of the incoming streak's \
                  light (at least {HIDDEN_PATH_LIGHT_MIN} for a ball leaving no faster than the \
@@ -2564,7 +2564,7 @@ fn read_body(
     if fit.m1.is_none() {
         notes.insert(
             0,
-            if cue_at_rest && deg(psi_s.abs()) > STOP_PSI_MAX_DEG {
+            if rest_oblique {
                 "cue ball comes to rest near the impact (a stun or draw shot): delta1, theta1 \
                  undefined"
             } else if cue_at_rest {
