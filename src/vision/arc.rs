@@ -529,14 +529,14 @@ impl Pixels {
         );
         let inc_piece = Prepared::new(inc_a, g.p, 1.0);
         let kernel = Kernel::for_cells(r, stride);
-        let u = sig.projector(u);
+        let plane = sig.projected(sig.projector(u));
         // Offsets of the cell's pixels around its centre (half-pixel ones are bilinear).
         let half = (stride as f64 - 1.0) / 2.0;
         let cell = |q: (f64, f64)| -> Option<f64> {
             let mut acc = 0.0f64;
             for jy in 0..stride {
                 for jx in 0..stride {
-                    acc += sig.sample_u(q.0 - half + jx as f64, q.1 - half + jy as f64, u)? as f64;
+                    acc += plane.sample(q.0 - half + jx as f64, q.1 - half + jy as f64)? as f64;
                 }
             }
             Some(acc / (stride * stride) as f64)

@@ -535,6 +535,7 @@ pub fn sample_profile(
     let n = (-d.1, d.0);
     let half = (1.7 * r).ceil() as i64;
     let n_a = sub_steps(step);
+    let plane = sig.projected(w);
     let mut t = Vec::with_capacity(2 * half as usize + 1);
     let mut v = Vec::with_capacity(2 * half as usize + 1);
     for k in -half..=half {
@@ -545,7 +546,7 @@ pub fn sample_profile(
             let a = (j as f64 + 0.5) / n_a as f64 * step - step / 2.0;
             let x = p.0 + a * d.0 + tk * n.0;
             let y = p.1 + a * d.1 + tk * n.1;
-            match sig.sample_u(x, y, w) {
+            match plane.sample(x, y) {
                 Some(v) => acc += v,
                 None => {
                     inside = false;
