@@ -68,7 +68,7 @@ pub struct Signal<'a> {
 
 /// Projected full-resolution planes by projector, computed on first use.
 #[derive(Debug, Clone, Default)]
-pub struct PlaneCache(Arc<Mutex<Vec<([f32; 3], Arc<Tiles>)>>>);
+pub struct PlaneCache(Arc<Mutex<Vec<Arc<Tiles>>>>);
 
 /// Side of a [`Projected`] tile (px); each tile stores one more row and column, so that a
 /// bilinear sample never needs a second tile.
@@ -176,8 +176,10 @@ impl Signal<'_> {
     /// per projector and photo, a tile at a time where read.
     pub fn projected(&self, u: [f32; 3]) -> Projected<'_> {
         let mut planes = self.planes.0.lock().unwrap_or_else(|e| e.into_inner());
-        let tiles = match planes.iter().find(|(k, _)| *k == u) {
-            Some((_, t)) => t.clone(),
+        // The same projector to the bit: a plane holds exactly its products.
+        let bits = u.map(f32::to_bits);
+        let tiles = match planes.iter().find(|t| t.u.map(f32::to_bits) == bits) {
+            Some(t) => t.clone(),
             None => {
                 let (tw, th) = (self.w.div_ceil(TILE), self.h.div_ceil(TILE));
                 let t = Arc::new(Tiles {
@@ -185,7 +187,7 @@ impl Signal<'_> {
                     tw,
                     tiles: (0..tw * th).map(|_| OnceLock::new()).collect(),
                 });
-                planes.push((u, t.clone()));
+                planes.push(t.clone());
                 t
             }
         };
