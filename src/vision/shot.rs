@@ -6,7 +6,7 @@
 //! An assignment is physical when the incoming ball moves towards the object ball
 //! (`psi ∈ [0°, 90°)`), the object ball's streak leaves from `O` within 35° of `x̂` (`|delta2|` is
 //! a throw angle, a few degrees), and the cue ball leaves into the half-plane the mirror convention
-//! allows (`delta1 ∈ [-25°, 150°]`). Among physical assignments the one with the smallest
+//! allows (its rolling direction within [-25°, 175°] of `x̂`, [`CUE_THETA_MAX_DEG`]). Among physical assignments the one with the smallest
 //! `|theta2|` wins; if the runner-up is about as good, the photo is declined (cannot tell which
 //! ball is which). Two streaks only: the cue ball stopped at the impact if a stationary disc
 //! sits at `P` (then `delta1`, `theta1` are undefined; which of the two touching resting balls
@@ -528,6 +528,18 @@ fn initial_path(
 /// (realistic shot_013, with the texture map) 0.78.
 const CUE_COLOUR_MIN: f64 = 0.9;
 
+/// The cue ball's rolling direction `theta1` (degrees from `x̂`, in the mirrored frame) that a
+/// reading may give it. Its rolling velocity is `(5/7) v* + (2/7) R ω × z` after the impact:
+/// sideways `(5/7) v sin psi` in part (`v_y ≥ 0` by the mirror convention, less what friction
+/// and English take), forward or back by the spin it keeps. A follow shot turns it towards 0
+/// (friction and English a little below); a drawn cue ball (`r < 0`) comes back at up to 180°:
+/// a billiard ball with `r = -1` at 165° for psi 9°, at 150° (the bound until session 30) for
+/// psi 19° (the closed forms; `the_cue_balls_rolling_window_holds_every_impact_without_english`).
+/// The upper end stays short of the incoming streak's own way back (`180° + psi`, which wraps
+/// to below `-150°`); a drawn cue ball closer to it than 5° has no streak of its own.
+const CUE_THETA_MIN_DEG: f64 = -25.0;
+const CUE_THETA_MAX_DEG: f64 = 175.0;
+
 fn read_scene(
     streaks: &[Vec<Sample>],
     likeness: &[f64],
@@ -592,7 +604,9 @@ fn read_scene(
                         continue;
                     }
                     let d1m = m * t1;
-                    if !(-25f64.to_radians()..=150f64.to_radians()).contains(&d1m) {
+                    if !(CUE_THETA_MIN_DEG.to_radians()..=CUE_THETA_MAX_DEG.to_radians())
+                        .contains(&d1m)
+                    {
                         continue;
                     }
                     // The cue ball leaves at a larger angle from x than the object ball.
@@ -727,7 +741,8 @@ fn read_creep(
                 }
                 if same < CUE_COLOUR_MIN
                     || miss1 > 1.5 * r
-                    || !(-25f64.to_radians()..=150f64.to_radians()).contains(&d1m)
+                    || !(CUE_THETA_MIN_DEG.to_radians()..=CUE_THETA_MAX_DEG.to_radians())
+                        .contains(&d1m)
                 {
                     continue;
                 }
@@ -2784,6 +2799,58 @@ mod tests {
                 "psi {psi_deg}: {min_turn} vs {least}"
             );
         }
+    }
+
+    /// The window a reading allows the cue ball's rolling direction, against the impact model:
+    /// over restitution 0.5–1, ball–ball friction 0–0.8 and spin −1.5–2 without English, the
+    /// closed forms keep `theta1` (mirrored frame) above −25° at every psi from 3° to 85°, and
+    /// below 175° from psi 9° on; below that only a drawn cue ball passes 175°, coming back
+    /// within 5° of the incoming streak, where it leaves no streak of its own. Draws pass 150°,
+    /// the bound until session 30, up to psi 20° at least (billiard, `r = −1`: 165.1° at psi 9°,
+    /// 150° at psi 19°).
+    /// (English reverses the cue ball's sideways motion at small psi: the window is a
+    /// plausibility bound for the reading, not the model's whole range.)
+    #[test]
+    fn the_cue_balls_rolling_window_holds_every_impact_without_english() {
+        use crate::physics::{Coefficients, Shot, closed};
+        let theta1 = |psi_deg: f64, spin: f64, c: &Coefficients| {
+            let shot = Shot {
+                psi: psi_deg.to_radians(),
+                mass_ratio: 1.0,
+                spin,
+                english: 0.0,
+            };
+            closed::predict_auto(&shot, c)
+                .1
+                .theta1
+                .expect("moves")
+                .to_degrees()
+        };
+        for psi_deg in [3.0f64, 5.0, 9.0, 12.0, 20.0, 30.0, 45.0, 60.0, 75.0, 85.0] {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for ie in 0..=5 {
+                for im in 0..=8 {
+                    for ir in 0..=14 {
+                        let c = Coefficients::new(0.5 + 0.1 * ie as f64, 0.1 * im as f64, 0.2);
+                        let t = theta1(psi_deg, -1.5 + 0.25 * ir as f64, &c);
+                        lo = lo.min(t);
+                        hi = hi.max(t);
+                    }
+                }
+            }
+            assert!(lo >= CUE_THETA_MIN_DEG, "psi {psi_deg}: {lo}");
+            if psi_deg >= 9.0 {
+                assert!(hi <= CUE_THETA_MAX_DEG, "psi {psi_deg}: {hi}");
+            }
+            if psi_deg <= 20.0 {
+                assert!(hi > 150.0, "psi {psi_deg}: {hi}");
+            }
+        }
+        let billiard = Coefficients::new(0.97, 0.07, 0.2);
+        let draw = theta1(9.0, -1.0, &billiard);
+        assert!((165.0..165.2).contains(&draw), "{draw}");
+        let draw = theta1(19.0, -1.0, &billiard);
+        assert!((149.5..150.5).contains(&draw), "{draw}");
     }
 
     #[test]
