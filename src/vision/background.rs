@@ -268,11 +268,30 @@ pub(crate) fn block_mean(img: &RgbImage, f: usize) -> (usize, usize, Vec<[f32; 3
     let (cw, ch) = (img.w / f, img.h / f);
     let mut out = vec![[0f32; 3]; cw * ch];
     let norm = 1.0 / (f * f) as f32;
+    // Each block's sums take its pixels in the same order (row by row, left to right), four
+    // blocks at a time: twelve independent chains of additions instead of three, the same
+    // sums to the last bit.
+    const LANES: usize = 4;
     for cy in 0..ch {
+        let blocks = &mut out[cy * cw..(cy + 1) * cw];
         for y in cy * f..cy * f + f {
             let row = &img.data[3 * y * img.w..3 * (y + 1) * img.w];
-            for cx in 0..cw {
-                let o = &mut out[cy * cw + cx];
+            let mut quads = blocks.chunks_exact_mut(LANES);
+            for (q, group) in (&mut quads).enumerate() {
+                let mut acc: [[f32; 3]; LANES] = [group[0], group[1], group[2], group[3]];
+                for k in 0..f {
+                    for (l, a) in acc.iter_mut().enumerate() {
+                        let x = ((q * LANES + l) * f + k) * 3;
+                        a[0] += row[x];
+                        a[1] += row[x + 1];
+                        a[2] += row[x + 2];
+                    }
+                }
+                group.copy_from_slice(&acc);
+            }
+            let done = cw - cw % LANES;
+            for (i, o) in quads.into_remainder().iter_mut().enumerate() {
+                let cx = done + i;
                 for x in cx * f..cx * f + f {
                     o[0] += row[3 * x];
                     o[1] += row[3 * x + 1];
@@ -867,8 +886,8 @@ mod tests {
         assert_eq!(sig.planes.0.lock().unwrap().len(), 1);
     }
 
-    /// Block means against the plain definition, on an image whose size the blocks do not
-    /// divide; and the cloth polynomial of a smooth surface recovered to rounding.
+    /// Block means against the plain definition (and, to the bit, against the plain loop), on
+    /// an image whose size the blocks do not divide; and the cloth polynomial of a smooth surface recovered to rounding.
     #[test]
     fn block_means_and_the_cloth_polynomial_hold_their_definitions() {
         use super::super::image_io::RgbImage;
@@ -881,9 +900,28 @@ mod tests {
             .flat_map(|y| (0..w).flat_map(move |x| (0..3).map(move |c| val(x, y, c))))
             .collect();
         let img = RgbImage { w, h, data };
+        // The block sums as a plain loop, pixel by pixel into each block: block_mean adds in
+        // the same order, so it must agree to the bit.
+        let plain = |f: usize| {
+            let (cw, ch) = (w / f, h / f);
+            let mut out = vec![[0f32; 3]; cw * ch];
+            for y in 0..ch * f {
+                for x in 0..cw * f {
+                    let o = &mut out[(y / f) * cw + x / f];
+                    for (c, v) in o.iter_mut().enumerate() {
+                        *v += img.data[3 * (y * w + x) + c];
+                    }
+                }
+            }
+            out.iter()
+                .map(|o| o.map(|v| v * (1.0 / (f * f) as f32)))
+                .collect::<Vec<_>>()
+        };
         for f in [1, 2, 4, 5] {
             let (cw, ch, m) = super::block_mean(&img, f);
             assert_eq!((cw, ch), (w / f, h / f));
+            let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&m), bits(&plain(f)), "f {f}");
             for (cy, cx) in [(0, 0), (ch - 1, cw - 1), (ch / 2, cw / 3)] {
                 for (c, got) in m[cy * cw + cx].iter().enumerate() {
                     let mut s = 0.0f64;
