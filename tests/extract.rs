@@ -995,7 +995,7 @@ fn a_drawn_cue_ball_coming_back_beyond_150_degrees_is_read() {
     // with `r = -1` below psi 19°), so the right assignment was never tried and the photo was
     // declined as ambiguous between two wrong ones; on near head-on realistic seed 906 the same
     // bound made shot_003 (psi 9.0°, theta1 159°) a misreading, psi 0.25° and theta1 23.7°.
-    let (shot, t) = one_of_24("draw_back", "realistic", 404, "shot_016.jpg");
+    let (shot, t) = one_of_24("draw_beyond_150", "realistic", 404, "shot_016.jpg");
     let shot = &shot;
     let want = |k: &str| t[&shot.file][k].parse::<f64>().unwrap();
     assert!(

@@ -62,8 +62,25 @@ pub struct Signal<'a> {
     /// The cloth model used.
     pub cloth: ClothModel,
     /// Full-resolution projections of `rgb` already computed ([`Signal::projected`]), shared
-    /// by the photo's [`Signal::recoloured`] signals, which borrow the same pixels.
+    /// by the photo's [`Signal::recoloured`] signals (and clones), which read the same pixels:
+    /// `rgb` is not to be changed once the signal is built.
     pub planes: PlaneCache,
+}
+
+/// The pixel `(x0, y0)` whose cell holds `(x, y)` in a `w × h` image, and the fractions across
+/// it; `None` where a bilinear sample would need a pixel outside.
+#[inline]
+fn bilinear_cell(x: f64, y: f64, w: usize, h: usize) -> Option<(usize, usize, f32, f32)> {
+    if !(x >= 0.0 && y >= 0.0) {
+        return None;
+    }
+    // Truncation is the floor here (both are at least 0), and unlike `f64::floor` it is not a
+    // library call on the baseline x86-64 target (the samplers are the hottest loops).
+    let (x0, y0) = (x as usize, y as usize);
+    if x0 + 1 >= w || y0 + 1 >= h {
+        return None;
+    }
+    Some((x0, y0, (x - x0 as f64) as f32, (y - y0 as f64) as f32))
 }
 
 /// Projected full-resolution planes by projector, computed on first use.
@@ -98,14 +115,7 @@ impl Projected<'_> {
     /// Bilinear sample at `(x, y)`; `None` outside (as [`Signal::sample_u`]).
     #[inline]
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
-        if !(x >= 0.0 && y >= 0.0) {
-            return None;
-        }
-        let (x0, y0) = (x as usize, y as usize);
-        if x0 + 1 >= self.w || y0 + 1 >= self.h {
-            return None;
-        }
-        let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+        let (x0, y0, fx, fy) = bilinear_cell(x, y, self.w, self.h)?;
         let (tx, ty) = (x0 / TILE, y0 / TILE);
         let z = self.tiles.tiles[ty * self.tiles.tw + tx].get_or_init(|| self.tile(tx, ty));
         let i = (y0 - ty * TILE) * (TILE + 1) + (x0 - tx * TILE);
@@ -149,16 +159,7 @@ impl Signal<'_> {
     /// [`Signal::projector`], or any fixed weighting of the channels).
     #[inline]
     pub fn sample_u(&self, x: f64, y: f64, u: [f32; 3]) -> Option<f32> {
-        if !(x >= 0.0 && y >= 0.0) {
-            return None;
-        }
-        // Truncation is the floor here (both are at least 0), and unlike `f64::floor` it is
-        // not a library call on the baseline x86-64 target (this is the hottest sampler).
-        let (x0, y0) = (x as usize, y as usize);
-        if x0 + 1 >= self.w || y0 + 1 >= self.h {
-            return None;
-        }
-        let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+        let (x0, y0, fx, fy) = bilinear_cell(x, y, self.w, self.h)?;
         let v = |i: usize| {
             let k = 3 * i;
             u[0] * self.rgb[k] + u[1] * self.rgb[k + 1] + u[2] * self.rgb[k + 2]

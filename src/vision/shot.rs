@@ -2,23 +2,23 @@
 //!
 //! Which streak is which: every assignment of the (up to four) streaks to *incoming*, *cue ball
 //! out* and *object ball out* is tried. For each, the incoming centre-line (RANSAC, then least
-//! squares) gives the impact point `P` (first point of that line at `2R` from `O`), hence `x̂`.
-//! An assignment is physical when the incoming ball moves towards the object ball
-//! (`psi ∈ [0°, 90°)`), the object ball's streak leaves from `O` within 35° of `x̂` (`|delta2|` is
-//! a throw angle, a few degrees), and the cue ball leaves into the half-plane the mirror convention
-//! allows (its rolling direction within [-25°, 175°] of `x̂`, [`CUE_THETA_MAX_DEG`]). Among physical assignments the one with the smallest
-//! `|theta2|` wins; if the runner-up is about as good, the photo is declined (cannot tell which
-//! ball is which). Two streaks only: the cue ball stopped at the impact if a stationary disc
-//! sits at `P` (then `delta1`, `theta1` are undefined; which of the two touching resting balls
-//! is the object ball only the object ball's slowing down tells, [`time_arrow`], and a reading
-//! whose arrows do not differ by two standard errors is declined), otherwise its streak is
-//! hidden and the photo is declined. At grazing incidence the object ball may creep a few radii
-//! and stop with no streak: where a second disc of it is found ([`disc::companion`]) the scene
-//! is also read as such (`read_creep`; the waiting disc is the one the incoming line meets at
-//! `2R`), its path is the line between the discs (`theta2` its direction, `delta2`
-//! unresolved), and the cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where
-//! no disc shows along the photo's mean ball colour (a dark ball on a light cloth), discs of
-//! every colour are read on their own colour, kept only with all three paths.
+//! squares) gives the impact point `P` (first point of that line at `2R` from `O`), hence `x̂`. An
+//! assignment is physical when the incoming ball moves towards the object ball (`psi ∈ [0°, 90°)`),
+//! the object ball's streak leaves from `O` within 35° of `x̂` (`|delta2|` is a throw angle, a few
+//! degrees), and the cue ball leaves into the half-plane the mirror convention allows (its rolling
+//! direction within [-25°, 175°] of `x̂`, [`CUE_THETA_MAX_DEG`]). Among physical assignments the
+//! one with the smallest `|theta2|` wins; if the runner-up is about as good, the photo is declined
+//! (cannot tell which ball is which). Two streaks only: the cue ball stopped at the impact if a
+//! stationary disc sits at `P` (then `delta1`, `theta1` are undefined; which of the two touching
+//! resting balls is the object ball only the object ball's slowing down tells, [`time_arrow`], and
+//! a reading whose arrows do not differ by two standard errors is declined), otherwise its streak
+//! is hidden and the photo is declined. At grazing incidence the object ball may creep a few radii
+//! and stop with no streak: where a second disc of it is found ([`disc::companion`]) the scene is
+//! also read as such (`read_creep`; the waiting disc is the one the incoming line meets at `2R`),
+//! its path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
+//! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where no
+//! disc shows along the photo's mean ball colour (a dark ball on a light cloth), discs of every
+//! colour are read on their own colour, kept only with all three paths.
 //!
 //! A straight path (`line`) states no start tangent: its `delta` is unresolved with the reason
 //! (the cue ball's may still come from the arc fit of the light at `P`, [`arc`]).
@@ -536,7 +536,7 @@ const CUE_COLOUR_MIN: f64 = 0.9;
 /// a billiard ball with `r = -1` at 165° for psi 9°, at 150° (the bound until session 30) for
 /// psi 19° (the closed forms; `the_cue_balls_rolling_window_holds_every_impact_without_english`).
 /// The upper end stays short of the incoming streak's own way back (`180° + psi`, which wraps
-/// to below `-150°`); a drawn cue ball closer to it than 5° has no streak of its own.
+/// to below `-150°`): a cue ball coming back within 5° of it runs inside the incoming streak.
 const CUE_THETA_MIN_DEG: f64 = -25.0;
 const CUE_THETA_MAX_DEG: f64 = 175.0;
 
@@ -2805,7 +2805,7 @@ mod tests {
     /// over restitution 0.5–1, ball–ball friction 0–0.8 and spin −1.5–2 without English, the
     /// closed forms keep `theta1` (mirrored frame) above −25° at every psi from 3° to 85°, and
     /// below 175° from psi 9° on; below that only a drawn cue ball passes 175°, coming back
-    /// within 5° of the incoming streak, where it leaves no streak of its own. Draws pass 150°,
+    /// within 5° of the incoming streak's line, inside that streak. Draws pass 150°,
     /// the bound until session 30, up to psi 20° at least (billiard, `r = −1`: 165.1° at psi 9°,
     /// 150° at psi 19°).
     /// (English reverses the cue ball's sideways motion at small psi: the window is a
