@@ -860,19 +860,22 @@ impl Template {
         // Parameters: [c, A, b_0..b_deg]; Gauss–Newton from the linear solution at c0.
         let mut p = [0.0; K];
         p[0] = c0;
+        // Normal equations summed in fixed-size arrays (the same sums in the same order as
+        // into the matrices, without their indexing in the loop over the profile).
         {
-            let mut m = nalgebra::DMatrix::<f64>::zeros(k - 1, k - 1);
-            let mut rv = nalgebra::DVector::<f64>::zeros(k - 1);
+            let (mut ms, mut rs) = ([[0.0; K]; K], [0.0; K]);
             for (tk, vk, f) in &rows {
                 let mut g = *f;
                 g[1] = self.at(tk - c0).0;
                 for a in 1..k {
-                    rv[a - 1] += g[a] * vk;
+                    rs[a - 1] += g[a] * vk;
                     for bb in a..k {
-                        m[(a - 1, bb - 1)] += g[a] * g[bb];
+                        ms[a - 1][bb - 1] += g[a] * g[bb];
                     }
                 }
             }
+            let mut m = nalgebra::DMatrix::<f64>::from_fn(k - 1, k - 1, |a, b| ms[a][b]);
+            let rv = nalgebra::DVector::<f64>::from_fn(k - 1, |a, _| rs[a]);
             m.fill_lower_triangle_with_upper_triangle();
             let lin = m.cholesky()?.solve(&rv);
             p[1..k].copy_from_slice(&lin.as_slice()[..k - 1]);
@@ -882,8 +885,7 @@ impl Template {
             if p[1] <= 0.0 {
                 return None;
             }
-            let mut ata = nalgebra::DMatrix::<f64>::zeros(k, k);
-            let mut atb = nalgebra::DVector::<f64>::zeros(k);
+            let (mut ms, mut bs) = ([[0.0; K]; K], [0.0; K]);
             let mut sse = 0.0;
             for (tk, vk, f) in &rows {
                 let (tv, tg) = self.at(tk - p[0]);
@@ -893,13 +895,15 @@ impl Template {
                 let model: f64 = (1..k).map(|q| p[q] * j[q]).sum();
                 let e = vk - model;
                 for a in 0..k {
-                    atb[a] += j[a] * e;
+                    bs[a] += j[a] * e;
                     for bb in a..k {
-                        ata[(a, bb)] += j[a] * j[bb];
+                        ms[a][bb] += j[a] * j[bb];
                     }
                 }
                 sse += e * e;
             }
+            let mut ata = nalgebra::DMatrix::<f64>::from_fn(k, k, |a, b| ms[a][b]);
+            let atb = nalgebra::DVector::<f64>::from_fn(k, |a, _| bs[a]);
             ata.fill_lower_triangle_with_upper_triangle();
             let chol = ata.cholesky()?;
             let step = chol.solve(&atb);
