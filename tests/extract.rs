@@ -1019,6 +1019,30 @@ fn a_drawn_cue_ball_coming_back_beyond_150_degrees_is_read() {
 }
 
 #[test]
+fn a_faint_incoming_streak_is_told_the_cue_balls_by_its_own_colour() {
+    // Realistic seed 707's shot_005 (steel, psi 35.5°): three clear streaks in a Y, the
+    // incoming one found only along its length (a faint streak). Its colour, the mean along its
+    // line on the coarse map, was the cloth's blotches as much as the white ball's
+    // (`[0.77, -0.10, 0.63]`), 0.81 like the cue ball's outgoing streak, under the 0.9 the two
+    // must share: no reading. Measured along its samples (axis minus flanks) it is 0.9998 like
+    // it (session 30).
+    let (shot, t) = one_of_24("faint_colour", "realistic", 707, "shot_005.jpg");
+    let shot = &shot;
+    assert_eq!(shot.status, Status::Ok, "{shot:#?}");
+    for (v, sd, key) in [
+        (shot.psi_deg, shot.psi_err_deg, "psi_deg"),
+        (shot.theta1_deg, shot.theta1_err_deg, "theta1_deg"),
+        (shot.theta2_deg, shot.theta2_err_deg, "theta2_deg"),
+    ] {
+        let (e, sd) = (abs_error(&t, shot, v, key), sd.unwrap());
+        assert!(
+            e < 3.0 * sd && sd < 0.6,
+            "{key}: {e}° off at {sd}°: {shot:#?}"
+        );
+    }
+}
+
+#[test]
 fn a_rolling_line_over_a_short_stretch_states_a_wider_sigma() {
     // Realistic seed 505's shot_013 (psi 15°, a drawn cue ball with English): the cue ball's
     // streak is clear of the others for only 1.7 R. Its rolling line, read as parabola+line,

@@ -525,8 +525,12 @@ fn initial_path(
 /// Least colour likeness (cosine of the ball-minus-cloth directions) of the cue ball's outgoing
 /// streak to its incoming one. Measured on the chosen readings of the accuracy sets: 0.998–1.0
 /// in clean and mixed photos, ≥ 0.956 in hard ones; a cloth blotch read as the cue ball's path
-/// (realistic shot_013, with the texture map) 0.78.
-const CUE_COLOUR_MIN: f64 = 0.9;
+/// (realistic shot_013, with the texture map) 0.78. 0.9 until session 30, when faint streaks
+/// got their colour from their samples ([`streak_colour`]): the 423 cue-ball pairs of right
+/// `ok` readings on 35 sets (19 comparison, 7 fresh, 9 near head-on) lie at 0.952–1.0, and a
+/// greenish cloth blotch found as a faint streak (near head-on realistic seed 908 shot_009)
+/// measured 0.914 like a white incoming streak, a misreading at 0.9 (psi 0.77° for 3.80°).
+const CUE_COLOUR_MIN: f64 = 0.94;
 
 /// The cue ball's rolling direction `theta1` (degrees from `x̂`, in the mirrored frame) that a
 /// reading may give it. Its rolling velocity is `(5/7) v* + (2/7) R ω × z` after the impact:
@@ -780,6 +784,62 @@ fn read_creep(
 const CREEP_PSI_MIN_DEG: f64 = 55.0;
 
 /// Unit colour direction (ball minus cloth) of the disc's inner half, from the coarse signal.
+/// A streak's colour direction (ball minus cloth, unit), measured along its clean centre-line
+/// samples on the coarse colour difference: the mean within `R/2` of the axis minus the mean
+/// on both flanks `1.6–2.2 R` out, summed over the samples. For a faint streak
+/// ([`Selected::faint`]), whose tracked colour is the mean along its line on the coarse map,
+/// the cloth's blotches as much as the ball: fresh realistic seed 707 shot_005's incoming white
+/// ball read `[0.77, -0.10, 0.63]` that way, 0.81 like its own outgoing streak, below
+/// [`CUE_COLOUR_MIN`]; measured here `[0.63, 0.48, 0.62]`, 0.9998 like it. `None` with fewer
+/// than five samples or no light.
+fn streak_colour(sig: &Signal, samples: &[Sample], r: f64) -> Option<[f32; 3]> {
+    let n = samples.len();
+    if n < 5 {
+        return None;
+    }
+    let f = sig.f as f64;
+    let at = |x: f64, y: f64| -> Option<[f32; 3]> {
+        let (cx, cy) = ((x / f - 0.5).round(), (y / f - 0.5).round());
+        (cx >= 0.0 && cy >= 0.0 && (cx as usize) < sig.cw && (cy as usize) < sig.ch)
+            .then(|| sig.coarse_diff[cy as usize * sig.cw + cx as usize])
+    };
+    let mean_over = |p: (f64, f64), nrm: (f64, f64), lo: f64, hi: f64| -> Option<[f64; 3]> {
+        let (mut acc, mut k) = ([0f64; 3], 0usize);
+        let mut t = lo;
+        while t <= hi {
+            let c = at(p.0 + t * nrm.0, p.1 + t * nrm.1)?;
+            for a in 0..3 {
+                acc[a] += f64::from(c[a]);
+            }
+            k += 1;
+            t += f;
+        }
+        (k > 0).then(|| acc.map(|v| v / k as f64))
+    };
+    let mut sum = [0f64; 3];
+    for i in 0..n {
+        let (a, b) = (&samples[i.saturating_sub(2)], &samples[(i + 2).min(n - 1)]);
+        let l = (b.x - a.x).hypot(b.y - a.y);
+        if l <= 0.0 {
+            continue;
+        }
+        let nrm = (-(b.y - a.y) / l, (b.x - a.x) / l);
+        let p = (samples[i].x, samples[i].y);
+        let (Some(core), Some(left), Some(right)) = (
+            mean_over(p, nrm, -0.5 * r, 0.5 * r),
+            mean_over(p, nrm, -2.2 * r, -1.6 * r),
+            mean_over(p, nrm, 1.6 * r, 2.2 * r),
+        ) else {
+            continue;
+        };
+        for c in 0..3 {
+            sum[c] += core[c] - 0.5 * (left[c] + right[c]);
+        }
+    }
+    let norm = (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
+    (norm > 0.0).then(|| sum.map(|v| (v / norm) as f32))
+}
+
 fn disc_colour(sig: &Signal, o: (f64, f64), r: f64) -> [f32; 3] {
     disc::mean_colour(sig, o, 0.5 * r).unwrap_or(sig.u)
 }
@@ -1453,10 +1513,14 @@ struct Selected {
     colours: Vec<[f32; 3]>,
     /// Whether a streak's clean samples come from the narrow margin ([`CLEAR_NARROW_R`]).
     narrow: Vec<bool>,
+    /// Whether a streak was found along its length ([`streak::find_faint`]), not where it
+    /// crosses the rings: its colour is then the mean along its line.
+    faint: Vec<bool>,
 }
 
-/// A tracked candidate: its centre-line samples and its colour direction.
-type Tracked = (Vec<Sample>, [f32; 3]);
+/// A tracked candidate: its centre-line samples, its colour direction, and whether it is a
+/// faint one ([`Selected::faint`]).
+type Tracked = (Vec<Sample>, [f32; 3], bool);
 
 /// Tracks the candidates, dropping tracks too short to be a streak.
 fn track_candidates(
@@ -1489,7 +1553,6 @@ fn track_candidates(
         // shorter than a radius did not follow it, and its few samples would only cut the
         // other streaks' clean samples (realistic shot_017 tracked eight such, of 0–6 samples).
         .filter(|t| t.0.len() >= if t.2 { FAINT_MIN_SAMPLES } else { 5 })
-        .map(|t| (t.0, t.1))
         .collect()
 }
 
@@ -1503,6 +1566,7 @@ const CLEAR_NARROW_MIN_ANGLE_DEG: f64 = 55.0;
 /// Keeps up to three distinct streaks of the tracked candidates (see [`Selected`]).
 fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bool) -> Selected {
     let track_u: Vec<[f32; 3]> = tracked.iter().map(|t| t.1).collect();
+    let track_faint: Vec<bool> = tracked.iter().map(|t| t.2).collect();
     let mut tracks: Vec<Vec<Sample>> = tracked.into_iter().map(|t| t.0).collect();
     // Two candidates can track the same streak (inner and outer ring): keep the longer.
     let mut dup = vec![false; tracks.len()];
@@ -1538,6 +1602,12 @@ fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bo
         .zip(&dup)
         .filter(|(_, d)| !**d)
         .map(|(u, _)| u)
+        .collect();
+    let track_faint: Vec<bool> = track_faint
+        .into_iter()
+        .zip(&dup)
+        .filter(|(_, d)| !**d)
+        .map(|(f, _)| f)
         .collect();
     // Drop samples whose profile window reaches into another streak (near the impact, crossings);
     // this first cut only serves the scene reading, the fit uses re-measured samples below.
@@ -1627,11 +1697,13 @@ fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bo
     let colours: Vec<[f32; 3]> = order.iter().map(|&a| track_u[a]).collect();
     let kept: Vec<Vec<Sample>> = order.iter().map(|&a| clean[a].clone()).collect();
     let narrow: Vec<bool> = order.iter().map(|&a| narrow[a]).collect();
+    let faint: Vec<bool> = order.iter().map(|&a| track_faint[a]).collect();
     Selected {
         raw,
         kept,
         colours,
         narrow,
+        faint,
     }
 }
 
@@ -1767,6 +1839,7 @@ fn read_body(
         mut kept,
         mut colours,
         narrow,
+        faint,
     } = sel;
     *used_narrow = narrow.iter().any(|n| *n);
     out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
@@ -1782,14 +1855,31 @@ fn read_body(
         2 => true,
         _ => false,
     };
-    // Colour likeness of each streak to the waiting disc (the object ball paints both).
+    // Colour likeness of each streak to the waiting disc (the object ball paints both), and of
+    // the cue ball's two streaks to each other: a faint streak's on its colour measured along
+    // its samples ([`streak_colour`]).
     let disc_u = disc_colour(sig, o, r);
-    let likeness: Vec<f64> = colours
+    let check_colours: Vec<[f32; 3]> = kept
+        .iter()
+        .zip(&colours)
+        .zip(&faint)
+        .map(|((k, c), f)| {
+            if *f {
+                streak_colour(sig, k, r).unwrap_or(*c)
+            } else {
+                *c
+            }
+        })
+        .collect();
+    let likeness: Vec<f64> = check_colours
         .iter()
         .map(|u| (0..3).map(|c| (u[c] * disc_u[c]) as f64).sum())
         .collect();
     if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-        eprintln!("likeness {likeness:?} colours {colours:?} disc {disc_u:?}");
+        eprintln!(
+            "likeness {likeness:?} colours {check_colours:?} (faint {faint:?}, tracked on \
+             {colours:?}) disc {disc_u:?}"
+        );
     }
     // The object ball's rest disc when it crept (grazing shots): its one centre-line "sample".
     let mut creep: Option<disc::Disc> = None;
@@ -1804,12 +1894,20 @@ fn read_body(
     let throw_reading = (opts.throw_max_deg() + THROW_READING_SLACK_DEG)
         .min(OBJECT_THROW_MAX_DEG)
         .to_radians();
-    let scene = read_scene(&kept, &likeness, &colours, o, r, cue_stopped, throw_reading);
+    let scene = read_scene(
+        &kept,
+        &likeness,
+        &check_colours,
+        o,
+        r,
+        cue_stopped,
+        throw_reading,
+    );
     let creep_reading = match &scene {
         Ok(rd) if rd.b1.is_none() => None,
         _ => tracks
             .companion(sig, &dsc)
-            .and_then(|pair| read_creep(sig, pair, &kept, &colours)),
+            .and_then(|pair| read_creep(sig, pair, &kept, &check_colours)),
     };
     let reading = match (scene, creep_reading) {
         (Ok(rd), None) => rd,
@@ -2799,6 +2897,67 @@ mod tests {
                 "psi {psi_deg}: {min_turn} vs {least}"
             );
         }
+    }
+
+    /// A faint white streak on cloth whose brightness blotches run along the cloth's hue: its
+    /// colour measured along its samples (axis minus flanks) is white, where the mean along its
+    /// line (how a faint streak's colour is first estimated) is mostly the blotch.
+    #[test]
+    fn a_streaks_colour_along_its_samples_leaves_the_cloth_out() {
+        let (f, cw, ch) = (4usize, 200usize, 150usize);
+        let white = [1.0f32 / 3f32.sqrt(); 3];
+        let (r, y_axis) = (20.0, 300.0);
+        let mut diff = vec![[0.0f32; 3]; cw * ch];
+        for cy in 0..ch {
+            for cx in 0..cw {
+                let (x, y) = ((cx as f64 + 0.5) * f as f64, (cy as f64 + 0.5) * f as f64);
+                let blotch = [0.0, -0.03 + 0.01 * (x / 100.0).sin() as f32, 0.005];
+                let ball = if (y - y_axis).abs() < r { 0.02 } else { 0.0 };
+                diff[cy * cw + cx] = [0, 1, 2].map(|c| blotch[c] + ball * white[c]);
+            }
+        }
+        let sig = Signal {
+            w: cw * f,
+            h: ch * f,
+            rgb: vec![0.0; 3].into(),
+            f,
+            cw,
+            ch,
+            coarse: vec![0.0; cw * ch],
+            coarse_diff: diff.clone().into(),
+            sigma_coarse: 1.0,
+            u: white,
+            proj: white,
+            cov_inv: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            cloth_level: 0.0,
+            plate: false,
+            cloth_brightness: vec![1.0; cw * ch].into(),
+            cloth: ClothModel::Surface,
+            planes: background::PlaneCache::default(),
+        };
+        let samples: Vec<Sample> = (12..68)
+            .map(|i| Sample {
+                x: 10.0 * i as f64,
+                y: y_axis,
+                sigma: 0.1,
+                amp: 0.02,
+            })
+            .collect();
+        let cos = |a: [f32; 3]| -> f64 {
+            let n = a.iter().map(|v| (v * v) as f64).sum::<f64>().sqrt();
+            (0..3).map(|c| (a[c] * white[c]) as f64).sum::<f64>() / n
+        };
+        let measured = streak_colour(&sig, &samples, r).expect("a colour");
+        assert!(cos(measured) > 0.999, "{measured:?}");
+        let cy = (y_axis / f as f64 - 0.5).round() as usize;
+        let mut along = [0.0f32; 3];
+        for cx in 0..cw {
+            for c in 0..3 {
+                along[c] += diff[cy * cw + cx][c];
+            }
+        }
+        assert!(cos(along) < CUE_COLOUR_MIN, "{along:?}");
+        assert!(streak_colour(&sig, &samples[..4], r).is_none());
     }
 
     /// The window a reading allows the cue ball's rolling direction, against the impact model:
