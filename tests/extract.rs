@@ -94,6 +94,31 @@ fn one_of_24(
     (shot, t)
 }
 
+/// Asserts that `r` is `ok` and reads each of `angles` (`psi`, `theta1`, ...) within 3 stated
+/// sigmas of the truth `t`, at a sigma under 0.6°.
+fn assert_ok_within_3_sigma(
+    r: &ShotRow,
+    t: &HashMap<String, HashMap<String, String>>,
+    angles: &[&str],
+) {
+    assert_eq!(r.status, Status::Ok, "{r:#?}");
+    for a in angles {
+        let (v, sd) = match *a {
+            "psi" => (r.psi_deg, r.psi_err_deg),
+            "delta1" => (r.delta1_deg, r.delta1_err_deg),
+            "delta2" => (r.delta2_deg, r.delta2_err_deg),
+            "theta1" => (r.theta1_deg, r.theta1_err_deg),
+            "theta2" => (r.theta2_deg, r.theta2_err_deg),
+            other => panic!("no angle {other}"),
+        };
+        let (e, sd) = (
+            abs_error(t, r, v, &format!("{a}_deg")),
+            sd.expect("a sigma"),
+        );
+        assert!(e < 3.0 * sd && sd < 0.6, "{a}: {e}° off at {sd}°: {r:#?}");
+    }
+}
+
 /// Removes every photo of a synthetic folder but `file` (each shot draws from its own stream, so
 /// the one left is the same photo as in the full set; the plate and `scene.toml` stay).
 fn keep_only(dir: &Path, file: &str) {
@@ -1003,19 +1028,7 @@ fn a_drawn_cue_ball_coming_back_beyond_150_degrees_is_read() {
         "{:?}",
         t[&shot.file]
     );
-    assert_eq!(shot.status, Status::Ok, "{shot:#?}");
-    for (v, sd, key) in [
-        (shot.psi_deg, shot.psi_err_deg, "psi_deg"),
-        (shot.theta1_deg, shot.theta1_err_deg, "theta1_deg"),
-        (shot.delta1_deg, shot.delta1_err_deg, "delta1_deg"),
-        (shot.theta2_deg, shot.theta2_err_deg, "theta2_deg"),
-    ] {
-        let (e, sd) = (abs_error(&t, shot, v, key), sd.unwrap());
-        assert!(
-            e < 3.0 * sd && sd < 0.6,
-            "{key}: {e}° off at {sd}°: {shot:#?}"
-        );
-    }
+    assert_ok_within_3_sigma(shot, &t, &["psi", "theta1", "delta1", "theta2"]);
 }
 
 #[test]
@@ -1028,18 +1041,7 @@ fn a_faint_incoming_streak_is_told_the_cue_balls_by_its_own_colour() {
     // it (session 30).
     let (shot, t) = one_of_24("faint_colour", "realistic", 707, "shot_005.jpg");
     let shot = &shot;
-    assert_eq!(shot.status, Status::Ok, "{shot:#?}");
-    for (v, sd, key) in [
-        (shot.psi_deg, shot.psi_err_deg, "psi_deg"),
-        (shot.theta1_deg, shot.theta1_err_deg, "theta1_deg"),
-        (shot.theta2_deg, shot.theta2_err_deg, "theta2_deg"),
-    ] {
-        let (e, sd) = (abs_error(&t, shot, v, key), sd.unwrap());
-        assert!(
-            e < 3.0 * sd && sd < 0.6,
-            "{key}: {e}° off at {sd}°: {shot:#?}"
-        );
-    }
+    assert_ok_within_3_sigma(shot, &t, &["psi", "theta1", "theta2"]);
 }
 
 #[test]
