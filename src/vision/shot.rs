@@ -527,7 +527,8 @@ fn initial_path(
 /// in clean and mixed photos, ≥ 0.956 in hard ones; a cloth blotch read as the cue ball's path
 /// (realistic shot_013, with the texture map) 0.78. 0.9 until session 30, when faint streaks
 /// got their colour from their samples ([`streak_colour`]): the 423 cue-ball pairs of right
-/// `ok` readings on 35 sets (19 comparison, 7 fresh, 9 near head-on) lie at 0.952–1.0, and a
+/// `ok` readings on 35 sets (19 comparison, 7 fresh, 9 near head-on; logged before that) lie
+/// at 0.952–1.0, none of those readings is lost at 0.94, and a
 /// greenish cloth blotch found as a faint streak (near head-on realistic seed 908 shot_009)
 /// measured 0.914 like a white incoming streak, a misreading at 0.9 (psi 0.77° for 3.80°).
 const CUE_COLOUR_MIN: f64 = 0.94;
