@@ -1566,8 +1566,8 @@ const CLEAR_NARROW_MIN_ANGLE_DEG: f64 = 55.0;
 
 /// Keeps up to three distinct streaks of the tracked candidates (see [`Selected`]).
 fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bool) -> Selected {
-    let track_u: Vec<[f32; 3]> = tracked.iter().map(|t| t.1).collect();
-    let track_faint: Vec<bool> = tracked.iter().map(|t| t.2).collect();
+    // Each track's colour and whether it is a faint one, kept alongside its samples.
+    let mut meta: Vec<([f32; 3], bool)> = tracked.iter().map(|t| (t.1, t.2)).collect();
     let mut tracks: Vec<Vec<Sample>> = tracked.into_iter().map(|t| t.0).collect();
     // Two candidates can track the same streak (inner and outer ring): keep the longer.
     let mut dup = vec![false; tracks.len()];
@@ -1598,18 +1598,11 @@ fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bo
         k += 1;
         !dup[k - 1]
     });
-    let track_u: Vec<[f32; 3]> = track_u
-        .into_iter()
-        .zip(&dup)
-        .filter(|(_, d)| !**d)
-        .map(|(u, _)| u)
-        .collect();
-    let track_faint: Vec<bool> = track_faint
-        .into_iter()
-        .zip(&dup)
-        .filter(|(_, d)| !**d)
-        .map(|(f, _)| f)
-        .collect();
+    let mut k = 0;
+    meta.retain(|_| {
+        k += 1;
+        !dup[k - 1]
+    });
     // Drop samples whose profile window reaches into another streak (near the impact, crossings);
     // this first cut only serves the scene reading, the fit uses re-measured samples below.
     let cut = |a: usize, k: f64| -> Vec<Sample> {
@@ -1695,10 +1688,10 @@ fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bo
     // (the scene reading leaves the one that fits no role unused).
     order.truncate(4);
     let raw: Vec<Vec<Sample>> = order.iter().map(|&a| tracks[a].clone()).collect();
-    let colours: Vec<[f32; 3]> = order.iter().map(|&a| track_u[a]).collect();
+    let colours: Vec<[f32; 3]> = order.iter().map(|&a| meta[a].0).collect();
     let kept: Vec<Vec<Sample>> = order.iter().map(|&a| clean[a].clone()).collect();
     let narrow: Vec<bool> = order.iter().map(|&a| narrow[a]).collect();
-    let faint: Vec<bool> = order.iter().map(|&a| track_faint[a]).collect();
+    let faint: Vec<bool> = order.iter().map(|&a| meta[a].1).collect();
     Selected {
         raw,
         kept,
