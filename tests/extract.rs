@@ -1172,3 +1172,24 @@ fn the_stability_bench_reads_as_extract_does() {
     assert!(!out.join("run_2.csv").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn an_object_streak_must_have_its_waiting_discs_colour() {
+    // Fresh realistic seed 707's shot_021 (rubber, psi 10.65°): a white cue ball and a coloured
+    // object ball. Until session 31 it was read `ok` with psi 14.50° ± 0.69° and `theta2`
+    // 23.1° for 2.0°: the streak taken for the object ball's leaves the disc in another colour
+    // (likeness 0.61 to the disc's own, measured on an annulus that leaves the highlight out;
+    // every right reading on 45 comparison tables is at 0.917 or more). One ball paints both.
+    let (shot, t) = one_of_24("object_colour", "realistic", 707, "shot_021.jpg");
+    let tr = &t[&shot.file];
+    assert!(
+        (tr["psi_deg"].parse::<f64>().unwrap() - 10.65).abs() < 0.01,
+        "{tr:?}"
+    );
+    assert_eq!(shot.status, Status::Declined, "{shot:#?}");
+    assert!(
+        shot.reason.contains("another colour than the disc"),
+        "{}",
+        shot.reason
+    );
+}

@@ -190,6 +190,45 @@ pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
     (n > 0.0).then(|| acc.map(|v| (v / n) as f32))
 }
 
+/// Unit direction of a resting ball's own colour (ball minus cloth): the per-channel median of
+/// the coarse colour difference over the annulus `0.35–0.85 R` around `c`. The mean over the
+/// inner disc ([`mean_colour`]) is dominated by the specular highlight and the lit crown, which
+/// are nearly white whatever the ball: a yellow billiard ball's mean came out 0.996 like a white
+/// cue ball's streak and 0.86 like its own. The annulus leaves the highlight out, and the median
+/// the light of a streak crossing the disc. `None` where the annulus holds fewer than 8 coarse
+/// pixels or the median vanishes.
+pub fn ball_colour(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f32; 3]> {
+    let f = sig.f as f64;
+    let (cx, cy) = (c.0 / f - 0.5, c.1 / f - 0.5);
+    let (r0, r1) = (0.35 * r / f, 0.85 * r / f);
+    let mut ch: [Vec<f32>; 3] = Default::default();
+    let (y0, y1) = (
+        (cy - r1).floor().max(0.0) as usize,
+        (cy + r1).ceil() as usize,
+    );
+    let (x0, x1) = (
+        (cx - r1).floor().max(0.0) as usize,
+        (cx + r1).ceil() as usize,
+    );
+    for y in y0..=y1.min(sig.ch - 1) {
+        for x in x0..=x1.min(sig.cw - 1) {
+            let d = (x as f64 - cx).hypot(y as f64 - cy);
+            if (r0..=r1).contains(&d) {
+                let v = sig.coarse_diff[y * sig.cw + x];
+                for a in 0..3 {
+                    ch[a].push(v[a]);
+                }
+            }
+        }
+    }
+    if ch[0].len() < 8 {
+        return None;
+    }
+    let m = ch.map(|mut v| f64::from(median(&mut v)));
+    let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+    (n > 0.0).then(|| m.map(|v| (v / n) as f32))
+}
+
 /// Sets the smoothed signal inside a circle (coarse pixels) to minus infinity.
 fn mask_disc(s: &mut [f32], w: usize, h: usize, c: (f64, f64), rr: f64) {
     let (x0, x1) = (
@@ -876,5 +915,54 @@ mod tests {
             let c = companion(&sig, &start(&sig, w));
             assert!(c.is_none(), "{c:?}");
         }
+    }
+
+    /// A red ball resting by a red streak and a white one, on the hard tier's light green cloth
+    /// with a plate, its highlight and lit crown as the renderer draws them. The ball is darker
+    /// than the cloth in green and blue, the highlight brighter in every channel, so the mean
+    /// over the inner disc ([`mean_colour`]) leans to white: [`ball_colour`] reads it like its
+    /// streak. (On the hard sets, with texture, noise and JPEG, the inner mean of such discs came
+    /// out 0.79–0.89 like the right object streaks, the annulus 0.98–1.0; session 31.)
+    #[test]
+    fn a_resting_balls_colour_leaves_its_highlight_out() {
+        let (red, white) = ([0.78, 0.12, 0.08], [0.86, 0.85, 0.80]);
+        let seg = |y: f64, rgb: [f32; 3]| render::Segment {
+            a: [60.0, y],
+            b: [540.0, y],
+            frac: 0.3,
+            r: 40.0,
+            rgb,
+        };
+        let frame = Frame {
+            segments: vec![seg(60.0, red), seg(340.0, white)],
+            discs: vec![render::Disc {
+                c: [300.0, 200.0],
+                r: 40.0,
+                frac: 0.5,
+                rgb: red,
+                specular: 0.3,
+            }],
+        };
+        let mut bd = Backdrop::plain(600, 400, 0.3);
+        bd.cloth_rgb = [0.16, 0.42, 0.24];
+        let base = bd.base_plate();
+        let img = to_float(&render::render(&frame, &bd, &base, Some(7)));
+        let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
+        let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
+        let cos = |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| f64::from(a[c] * b[c])).sum::<f64>();
+        let on_red = mean_colour(&sig, (300.0, 60.0), 20.0).expect("red streak");
+        let on_white = mean_colour(&sig, (300.0, 340.0), 20.0).expect("white streak");
+        let ball = ball_colour(&sig, (300.0, 200.0), 40.0).expect("ball");
+        let inner = mean_colour(&sig, (300.0, 200.0), 20.0).expect("inner disc");
+        // Measured: the annulus 0.9989 like the red streak and 0.23 like the white one; the
+        // inner mean 0.978 and 0.38.
+        assert!(cos(ball, on_red) > 0.995, "{ball:?} {on_red:?}");
+        assert!(cos(ball, on_white) < 0.5, "{ball:?} {on_white:?}");
+        assert!(cos(inner, on_red) < cos(ball, on_red) - 0.01, "{inner:?}");
+        assert!(
+            cos(inner, on_white) > cos(ball, on_white) + 0.1,
+            "{inner:?}"
+        );
+        assert!(ball_colour(&sig, (300.0, 200.0), 1.0).is_none());
     }
 }

@@ -533,6 +533,16 @@ fn initial_path(
 /// measured 0.914 like a white incoming streak, a misreading at 0.9 (psi 0.77° for 3.80°).
 const CUE_COLOUR_MIN: f64 = 0.94;
 
+/// Smallest colour likeness (cosine of the ball-minus-cloth directions) of the object ball's
+/// streak to its waiting disc ([`disc::ball_colour`]): one ball paints both. Measured on 45
+/// tables (the 35 comparison tables and ten fresh near head-on realistic sets, seeds 911–920;
+/// session 31), on the 523 `ok` readings with a logged likeness: the 503 right ones lie at
+/// 0.917–1.0 (the lowest a grey steel ball, whose shaded disc and streak differ most in hue;
+/// every other at 0.98 or more). Five of the 20 misread ones lie below 0.9, at −1.0 to 0.87:
+/// among them a white cue ball come to rest near `P` taken for a blue object ball's disc (0.63),
+/// and hard seed 303 shot_014 (−1.0). Refusing them declines those five and nothing else.
+const OBJECT_COLOUR_MIN: f64 = 0.9;
+
 /// The cue ball's rolling direction `theta1` (degrees from `x̂`, in the mirrored frame) that a
 /// reading may give it. Its rolling velocity is `(5/7) v* + (2/7) R ω × z` after the impact:
 /// sideways `(5/7) v sin psi` in part (`v_y ≥ 0` by the mirror convention, less what friction
@@ -557,6 +567,9 @@ fn read_scene(
     let k = streaks.len();
     let lines: Vec<Option<Line>> = streaks.iter().map(|s| fit_line(s)).collect();
     let mut readings = Vec::new();
+    // The lowest colour likeness of a streak that leaves the disc as the object ball's would
+    // but is refused for its colour ([`OBJECT_COLOUR_MIN`]), for the reason when nothing reads.
+    let mut refused_colour: Option<f64> = None;
     for inc in 0..k {
         let Some((p, alpha, psi_s)) = lines[inc].and_then(|li| impact_from_incoming(&li, o, r))
         else {
@@ -581,6 +594,18 @@ fn read_scene(
                     eprintln!(
                         "inc {inc} b2 {b2}: t2 {:.1}° miss2 {miss2:.1}",
                         t2.to_degrees()
+                    );
+                }
+                continue;
+            }
+            // The object ball paints its waiting disc and its streak: a streak of another
+            // colour leaving along the line of centres is not its path ([`OBJECT_COLOUR_MIN`]).
+            if likeness[b2] < OBJECT_COLOUR_MIN {
+                refused_colour = Some(refused_colour.map_or(likeness[b2], |c| c.min(likeness[b2])));
+                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                    eprintln!(
+                        "inc {inc} b2 {b2}: object streak's colour {:.3} like the disc's",
+                        likeness[b2]
                     );
                 }
                 continue;
@@ -641,11 +666,16 @@ fn read_scene(
         }
     }
     let Some(best) = readings.first().cloned() else {
-        return Err(
+        let colour = refused_colour.map_or(String::new(), |c| {
+            format!(
+                "; a streak leaving it so has another colour than the disc (likeness {c:.2}, \
+                 at least {OBJECT_COLOUR_MIN} for the ball that waited there)"
+            )
+        });
+        return Err(format!(
             "no physical reading of the streaks (no incoming path meeting the object ball with \
-             an object-ball path leaving along the line of centres)"
-                .into(),
-        );
+             an object-ball path leaving along the line of centres{colour})"
+        ));
     };
     if let Some(second) = readings.get(1)
         && second.cost < best.cost + 3f64.to_radians()
@@ -841,8 +871,10 @@ fn streak_colour(sig: &Signal, samples: &[Sample], r: f64) -> Option<[f32; 3]> {
     (norm > 0.0).then(|| sum.map(|v| (v / norm) as f32))
 }
 
+/// A resting ball's colour ([`disc::ball_colour`], its highlight left out), or the signal's
+/// colour where the annulus is too small to tell.
 fn disc_colour(sig: &Signal, o: (f64, f64), r: f64) -> [f32; 3] {
-    disc::mean_colour(sig, o, 0.5 * r).unwrap_or(sig.u)
+    disc::ball_colour(sig, o, r).unwrap_or(sig.u)
 }
 
 /// Whether a stationary ball sat at `p`: mean signal over a disc of radius `R/2` at `p` is at
