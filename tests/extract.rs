@@ -1193,3 +1193,33 @@ fn an_object_streak_must_have_its_waiting_discs_colour() {
         shot.reason
     );
 }
+
+#[test]
+fn a_two_streak_reading_with_light_but_no_ball_at_p_is_held_to_the_hidden_path_checks() {
+    // Near head-on realistic seed 920's shot_019 (steel, psi 6.93°, a draw shot): the drawn cue
+    // ball's short, bright way back is taken for the incoming streak, and its rounded end lights
+    // `P` without the rim of a resting ball. Until session 31 the checks of a reading without
+    // the cue ball's path (psi's sigma at most 0.5°, the object streak's light) held only where
+    // `P` was dark, and this photo was `ok` at psi 30.15° ± 0.64° with the reason "cue ball's
+    // path not found". Now every two-streak reading without a resting ball at `P` is held to
+    // them.
+    let (r, t) = only_photo(
+        "draw_way_back",
+        "realistic",
+        24,
+        920,
+        &["--material", "mixed", "--psi", "0:12"],
+        "shot_019.jpg",
+    );
+    assert!(
+        (t["psi_deg"].parse::<f64>().unwrap() - 6.93).abs() < 0.01,
+        "{t:?}"
+    );
+    assert_eq!(r.status, Status::Declined, "{r:#?}");
+    assert!(
+        r.reason
+            .contains("too uncertain to read the shot without it"),
+        "{}",
+        r.reason
+    );
+}

@@ -198,6 +198,15 @@ pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
 /// the light of a streak crossing the disc. `None` where the annulus holds fewer than 8 coarse
 /// pixels or the median vanishes.
 pub fn ball_colour(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f32; 3]> {
+    let m = ball_light(sig, c, r)?;
+    let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+    (n > 0.0).then(|| m.map(|v| (v / n) as f32))
+}
+
+/// The per-channel median of the coarse colour difference (ball minus cloth) over the annulus
+/// `0.35–0.85 R` around `c` ([`ball_colour`] before normalising): a resting ball's light in
+/// every colour at once. `None` where the annulus holds fewer than 8 coarse pixels.
+fn ball_light(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f64; 3]> {
     let f = sig.f as f64;
     let (cx, cy) = (c.0 / f - 0.5, c.1 / f - 0.5);
     let (r0, r1) = (0.35 * r / f, 0.85 * r / f);
@@ -224,9 +233,7 @@ pub fn ball_colour(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f32; 3]> {
     if ch[0].len() < 8 {
         return None;
     }
-    let m = ch.map(|mut v| f64::from(median(&mut v)));
-    let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
-    (n > 0.0).then(|| m.map(|v| (v / n) as f32))
+    Some(ch.map(|mut v| f64::from(median(&mut v))))
 }
 
 /// Sets the smoothed signal inside a circle (coarse pixels) to minus infinity.

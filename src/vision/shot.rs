@@ -2309,10 +2309,13 @@ fn read_body(
     // Two streaks only: which story the light tells must agree with the impact angle.
     if cue_stopped {
         let psi_deg = deg(psi_s.abs());
-        let without_path = path_not_found || rest_oblique;
+        // Every two-streak reading without a ball resting at P is read without the cue ball's
+        // path, whether or not some light lies at P (streaks overlapping there light it without
+        // a rim): the checks of a hidden path hold for all of them, as the reason says.
+        let without_path = !cue_at_rest || rest_oblique;
         // The object ball's streak light against the incoming one's ([`HIDDEN_PATH_LIGHT_MIN`]).
         let light_ratio = median_amp(&measured[reading.b2]) / median_amp(&measured[reading.inc]);
-        let story = if path_not_found {
+        let story = if !cue_at_rest {
             "only two streaks and no ball at rest at the impact point"
         } else {
             "a ball rests near the impact point at an oblique impact"
