@@ -1204,7 +1204,7 @@ fn a_two_streak_reading_with_light_but_no_ball_at_p_is_held_to_the_hidden_path_c
     // path not found". Now every two-streak reading without a resting ball at `P` is held to
     // them.
     let (r, t) = only_photo(
-        "draw_way_back",
+        "draw_back_as_incoming",
         "realistic",
         24,
         920,
@@ -1219,6 +1219,36 @@ fn a_two_streak_reading_with_light_but_no_ball_at_p_is_held_to_the_hidden_path_c
     assert!(
         r.reason
             .contains("too uncertain to read the shot without it"),
+        "{}",
+        r.reason
+    );
+}
+
+#[test]
+fn a_swapped_reading_of_two_resting_balls_must_beat_the_first_ones_time_arrow() {
+    // Near head-on realistic seed 919's shot_020 (rubber, psi 4.05°, a draw shot): a white cue
+    // ball drawn back to rest against the red object ball's disc. The first reading (right
+    // roles) has the object ball brightening +7.7 ± 4.8 % per R more than the incoming streak,
+    // short of 2 standard errors; the swapped one +6.1 ± 1.7 %, and until session 31 it stood:
+    // `ok` at psi 0.21° for 4.05°, the red ball taken for the cue ball. Both readings measure
+    // the same two streaks with the roles exchanged, so arrows favouring both are not the
+    // balls': the swapped reading must now also beat the first one's difference.
+    let (r, t) = only_photo(
+        "swapped_rest",
+        "realistic",
+        24,
+        919,
+        &["--material", "mixed", "--psi", "0:12"],
+        "shot_020.jpg",
+    );
+    assert!(
+        (t["psi_deg"].parse::<f64>().unwrap() - 4.05).abs() < 0.01,
+        "{t:?}"
+    );
+    assert_eq!(r.status, Status::Declined, "{r:#?}");
+    assert!(
+        r.reason
+            .contains("cannot tell which resting ball is the object ball"),
         "{}",
         r.reason
     );
