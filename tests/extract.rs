@@ -490,7 +490,7 @@ fn resting_balls_told_apart_only_by_a_clear_time_arrow() {
         .iter()
         .filter(|r| {
             r.reason.starts_with(
-                "cannot tell which resting ball is the object ball (in neither reading does",
+                "cannot tell which resting ball is the object ball (the object ball brightens",
             )
         })
         .count();

@@ -192,21 +192,13 @@ pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
 
 /// Unit direction of a resting ball's own colour (ball minus cloth): the per-channel median of
 /// the coarse colour difference over the annulus `0.35–0.85 R` around `c`. The mean over the
-/// inner disc ([`mean_colour`]) is dominated by the specular highlight and the lit crown, which
-/// are nearly white whatever the ball: a yellow billiard ball's mean came out 0.996 like a white
-/// cue ball's streak and 0.86 like its own. The annulus leaves the highlight out, and the median
-/// the light of a streak crossing the disc. `None` where the annulus holds fewer than 8 coarse
-/// pixels or the median vanishes.
+/// inner disc ([`mean_colour`]) takes in the specular highlight and the lit crown, which are
+/// nearly white whatever the ball; where the ball is darker than the cloth in some channels that
+/// turns its colour far from its streak's (hard seed 404 shot_014, a red ball on light green
+/// cloth: `[0.90, −0.42, 0.11]`, 0.79 like its own streak; the annulus `[0.71, −0.68, −0.21]`,
+/// 0.98). The median also leaves out the light of a streak crossing the disc. `None` where the
+/// annulus holds fewer than 8 coarse pixels or the median vanishes.
 pub fn ball_colour(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f32; 3]> {
-    let m = ball_light(sig, c, r)?;
-    let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
-    (n > 0.0).then(|| m.map(|v| (v / n) as f32))
-}
-
-/// The per-channel median of the coarse colour difference (ball minus cloth) over the annulus
-/// `0.35–0.85 R` around `c` ([`ball_colour`] before normalising): a resting ball's light in
-/// every colour at once. `None` where the annulus holds fewer than 8 coarse pixels.
-fn ball_light(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f64; 3]> {
     let f = sig.f as f64;
     let (cx, cy) = (c.0 / f - 0.5, c.1 / f - 0.5);
     let (r0, r1) = (0.35 * r / f, 0.85 * r / f);
@@ -233,7 +225,9 @@ fn ball_light(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f64; 3]> {
     if ch[0].len() < 8 {
         return None;
     }
-    Some(ch.map(|mut v| f64::from(median(&mut v))))
+    let m = ch.map(|mut v| f64::from(median(&mut v)));
+    let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+    (n > 0.0).then(|| m.map(|v| (v / n) as f32))
 }
 
 /// Sets the smoothed signal inside a circle (coarse pixels) to minus infinity.
