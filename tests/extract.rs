@@ -85,8 +85,21 @@ fn one_of_24(
     seed: u64,
     file: &str,
 ) -> (ShotRow, HashMap<String, HashMap<String, String>>) {
+    one_of_24_with(name, tier, seed, &[], file)
+}
+
+/// [`one_of_24`] with more `synth` flags (`extra`).
+fn one_of_24_with(
+    name: &str,
+    tier: &str,
+    seed: u64,
+    extra: &[&str],
+    file: &str,
+) -> (ShotRow, HashMap<String, HashMap<String, String>>) {
     let dir = scratch(name);
-    synth(&dir, tier, 24, seed, &["--size", "2400x1600"]);
+    let mut args = extra.to_vec();
+    args.extend(["--size", "2400x1600"]);
+    synth(&dir, tier, 24, seed, &args);
     let (_, rows) = extract_errors(&dir, 24, &[]);
     let t = truth(&dir);
     let _ = std::fs::remove_dir_all(&dir);
@@ -1251,5 +1264,36 @@ fn a_swapped_reading_of_two_resting_balls_must_beat_the_first_ones_time_arrow() 
             .contains("cannot tell which resting ball is the object ball"),
         "{}",
         r.reason
+    );
+}
+
+#[test]
+fn a_cue_ball_resting_at_p_is_seen_in_its_own_colour() {
+    // Near head-on realistic seed 911's shot_003 (rubber, psi 6.12°, a stun shot): the white cue
+    // ball rests against the purple object ball's disc. The reading took the white ball for the
+    // object ball, and so the purple disc for the cue ball resting at `P`. On the photo's mean
+    // colour that disc is faint, so no ball was seen resting there, and the shot was read as one
+    // whose cue-ball path is hidden: `ok` at psi 12.19° ± 0.33°, `theta2` 17.4° for 0.9°. In the
+    // incoming streak's own colour the disc's rim is 8.8 times the streak's light (3 marks a
+    // resting ball; hidden paths at −1.1 to 2.0 on 45 tables, session 31). Seen, the two resting
+    // balls go to the time arrows, which cannot tell them apart here.
+    let (shot, t) = one_of_24_with(
+        "cue_colour_rest",
+        "realistic",
+        911,
+        &["--material", "mixed", "--psi", "0:12"],
+        "shot_003.jpg",
+    );
+    let tr = &t[&shot.file];
+    assert!(
+        (tr["psi_deg"].parse::<f64>().unwrap() - 6.12).abs() < 0.01,
+        "{tr:?}"
+    );
+    assert_eq!(shot.status, Status::Declined, "{shot:#?}");
+    assert!(
+        shot.reason
+            .starts_with("cannot tell which resting ball is the object ball"),
+        "{}",
+        shot.reason
     );
 }

@@ -1023,7 +1023,11 @@ const REST_RIM: f64 = 0.3;
 /// shot's cue ball; cue-ball paths hidden near P 0.67–1.2 on every `ok` reading). Realistic
 /// seed 404 shot_019 (psi 7°) read the cue ball crept to rest as the object ball's disc and the
 /// coloured object ball at P at 0.28 of that disc's contrast but 7.7 times the light of the
-/// streak read as incoming (its own): psi 12° off at a stated 0.16°.
+/// streak read as incoming (its own): psi 12° off at a stated 0.16°. Since session 31 the rim is
+/// also measured in the incoming streak's own colour (a white cue ball resting against a purple
+/// object ball, near head-on realistic seed 911 shot_003, was missed on the mean colour): on 45
+/// tables the `ok` readings with a ball resting at P lie at 3.5–30 there, those with the cue
+/// ball's path hidden at −1.1 to 2.0, and that misreading at 8.8.
 const REST_OVER_STREAK: f64 = 3.0;
 
 /// Largest impact angle (degrees) at which a cue ball can stop at P as a head-on stun shot's
@@ -1987,7 +1991,17 @@ fn read_body(
         (x0[0] - 2.0 * r * x0[3].cos(), x0[1] - 2.0 * r * x0[3].sin())
     };
     let mut cue_at_rest = false;
-    let path_not_found = cue_stopped && {
+    let inc_amp = median_amp(&kept[reading.inc]);
+    // The cue ball painted the incoming streak and, resting at P, a disc of the same colour:
+    // that disc's rim in the streak's own colour, against the streak's light. The photo's mean
+    // colour shows a coloured cue ball weakly, and a white cue ball resting against a coloured
+    // object ball's disc was then missed ([`REST_OVER_STREAK`]).
+    let over_in_cue_colour = if cue_stopped && inc_amp > 0.0 {
+        rim_at(&sig.recoloured(colours[reading.inc]), p_imp, r) / inc_amp
+    } else {
+        0.0
+    };
+    let path_not_found = cue_stopped && over_in_cue_colour < REST_OVER_STREAK && {
         let ring = background::median(&mut ring_samples(sig, o, 1.6 * r, 64)) as f64;
         !disc_at(sig, p_imp, r, dsc.contrast, ring)
     };
@@ -1996,13 +2010,14 @@ fn read_body(
         // The same light against the incoming streak's, which the same ball painted in the same
         // colour: the disc's contrast is another ball's, and a coloured ball resting at P shows
         // weakly along the photo's mean ball colour.
-        let inc_amp = median_amp(&kept[reading.inc]);
         let over_streak = rim * dsc.contrast / inc_amp;
-        cue_at_rest = rim >= REST_RIM || (inc_amp > 0.0 && over_streak >= REST_OVER_STREAK);
+        cue_at_rest = rim >= REST_RIM
+            || (inc_amp > 0.0 && over_streak >= REST_OVER_STREAK)
+            || over_in_cue_colour >= REST_OVER_STREAK;
         if debug {
             eprintln!(
                 "two streaks: rim at P {rim:.3} of the disc contrast, {over_streak:.2} of the \
-                 incoming streak's light"
+                 incoming streak's light ({over_in_cue_colour:.2} in its own colour)"
             );
         }
     }
