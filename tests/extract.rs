@@ -1297,3 +1297,31 @@ fn a_cue_ball_resting_at_p_is_seen_in_its_own_colour() {
         shot.reason
     );
 }
+
+#[test]
+fn a_fainter_disc_next_to_a_brighter_one_is_not_read_as_the_object_balls() {
+    // Near head-on realistic seed 908's shot_017 (steel, psi 6.39°, a stun shot): the brighter
+    // disc is the waiting object ball's, and its reading is refused (no physical assignment of
+    // the streaks). Until session 31 the next candidate, the cue ball at rest 1.9 R away with
+    // 0.74 of that contrast, then gave a three-streak reading `ok` at psi 0.16° ± 0.28°,
+    // `theta2` 5.35° for 1.37°, leaving the brighter disc unexplained.
+    let (shot, t) = one_of_24_with(
+        "brighter_near",
+        "realistic",
+        908,
+        &["--psi", "0:12"],
+        "shot_017.jpg",
+    );
+    let tr = &t[&shot.file];
+    assert!(
+        (tr["psi_deg"].parse::<f64>().unwrap() - 6.39).abs() < 0.01,
+        "{tr:?}"
+    );
+    assert_eq!(shot.status, Status::Declined, "{shot:#?}");
+    assert!(
+        shot.reason
+            .starts_with("the streaks read only around a fainter disc"),
+        "{}",
+        shot.reason
+    );
+}
