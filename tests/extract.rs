@@ -132,6 +132,18 @@ fn assert_ok_within_3_sigma(
     }
 }
 
+/// Asserts that `r` is the photo of true psi `psi_deg` (its truth row `tr`) and is declined.
+fn assert_declined_photo(r: &ShotRow, tr: &HashMap<String, String>, psi_deg: f64) {
+    assert!(
+        (tr["psi_deg"].parse::<f64>().unwrap() - psi_deg).abs() < 0.01,
+        "{tr:?}"
+    );
+    assert_eq!(r.status, Status::Declined, "{r:#?}");
+}
+
+/// `synth` flags of the near head-on realistic sets of session 31 (seeds 911–934).
+const NEAR_HEAD_ON_MIXED: &[&str] = &["--material", "mixed", "--psi", "0:12"];
+
 /// Removes every photo of a synthetic folder but `file` (each shot draws from its own stream, so
 /// the one left is the same photo as in the full set; the plate and `scene.toml` stay).
 fn keep_only(dir: &Path, file: &str) {
@@ -1194,12 +1206,7 @@ fn an_object_streak_must_have_its_waiting_discs_colour() {
     // (likeness 0.61 to the disc's own, measured on an annulus that leaves the highlight out;
     // every right reading on 45 comparison tables is at 0.917 or more). One ball paints both.
     let (shot, t) = one_of_24("object_colour", "realistic", 707, "shot_021.jpg");
-    let tr = &t[&shot.file];
-    assert!(
-        (tr["psi_deg"].parse::<f64>().unwrap() - 10.65).abs() < 0.01,
-        "{tr:?}"
-    );
-    assert_eq!(shot.status, Status::Declined, "{shot:#?}");
+    assert_declined_photo(&shot, &t[&shot.file], 10.65);
     assert!(
         shot.reason.contains("another colour than the disc"),
         "{}",
@@ -1221,14 +1228,10 @@ fn a_two_streak_reading_with_light_but_no_ball_at_p_is_held_to_the_hidden_path_c
         "realistic",
         24,
         920,
-        &["--material", "mixed", "--psi", "0:12"],
+        NEAR_HEAD_ON_MIXED,
         "shot_019.jpg",
     );
-    assert!(
-        (t["psi_deg"].parse::<f64>().unwrap() - 6.93).abs() < 0.01,
-        "{t:?}"
-    );
-    assert_eq!(r.status, Status::Declined, "{r:#?}");
+    assert_declined_photo(&r, &t, 6.93);
     assert!(
         r.reason
             .contains("too uncertain to read the shot without it"),
@@ -1251,14 +1254,10 @@ fn a_swapped_reading_of_two_resting_balls_must_beat_the_first_ones_time_arrow() 
         "realistic",
         24,
         919,
-        &["--material", "mixed", "--psi", "0:12"],
+        NEAR_HEAD_ON_MIXED,
         "shot_020.jpg",
     );
-    assert!(
-        (t["psi_deg"].parse::<f64>().unwrap() - 4.05).abs() < 0.01,
-        "{t:?}"
-    );
-    assert_eq!(r.status, Status::Declined, "{r:#?}");
+    assert_declined_photo(&r, &t, 4.05);
     assert!(
         r.reason
             .contains("cannot tell which resting ball is the object ball"),
@@ -1281,15 +1280,10 @@ fn a_cue_ball_resting_at_p_is_seen_in_its_own_colour() {
         "cue_colour_rest",
         "realistic",
         911,
-        &["--material", "mixed", "--psi", "0:12"],
+        NEAR_HEAD_ON_MIXED,
         "shot_003.jpg",
     );
-    let tr = &t[&shot.file];
-    assert!(
-        (tr["psi_deg"].parse::<f64>().unwrap() - 6.12).abs() < 0.01,
-        "{tr:?}"
-    );
-    assert_eq!(shot.status, Status::Declined, "{shot:#?}");
+    assert_declined_photo(&shot, &t[&shot.file], 6.12);
     assert!(
         shot.reason
             .starts_with("cannot tell which resting ball is the object ball"),
@@ -1312,12 +1306,7 @@ fn a_fainter_disc_next_to_a_brighter_one_is_not_read_as_the_object_balls() {
         &["--psi", "0:12"],
         "shot_017.jpg",
     );
-    let tr = &t[&shot.file];
-    assert!(
-        (tr["psi_deg"].parse::<f64>().unwrap() - 6.39).abs() < 0.01,
-        "{tr:?}"
-    );
-    assert_eq!(shot.status, Status::Declined, "{shot:#?}");
+    assert_declined_photo(&shot, &t[&shot.file], 6.39);
     assert!(
         shot.reason
             .starts_with("the streaks read only around a fainter disc"),

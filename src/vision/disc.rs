@@ -162,12 +162,11 @@ pub fn find_colour_candidates(sig: &Signal, k: usize) -> Vec<(CoarseDisc, [f32; 
     out
 }
 
-/// Unit direction of the mean coarse colour difference (ball minus cloth) over the disc of
-/// radius `rho` around `c` (full-resolution pixels); `None` where it vanishes.
-pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
-    let f = sig.f as f64;
-    let (cx, cy, rc) = (c.0 / f - 0.5, c.1 / f - 0.5, rho / f);
-    let mut acc = [0f64; 3];
+/// Calls `f` with the distance (coarse pixels) and the coarse colour difference of every coarse
+/// pixel within `rc` coarse pixels of `c` (full-resolution pixels), row by row.
+fn each_coarse_within(sig: &Signal, c: (f64, f64), rc: f64, mut f: impl FnMut(f64, [f32; 3])) {
+    let fs = sig.f as f64;
+    let (cx, cy) = (c.0 / fs - 0.5, c.1 / fs - 0.5);
     let (y0, y1) = (
         (cy - rc).floor().max(0.0) as usize,
         (cy + rc).ceil() as usize,
@@ -178,14 +177,23 @@ pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
     );
     for y in y0..=y1.min(sig.ch - 1) {
         for x in x0..=x1.min(sig.cw - 1) {
-            if (x as f64 - cx).hypot(y as f64 - cy) <= rc {
-                let d = sig.coarse_diff[y * sig.cw + x];
-                for a in 0..3 {
-                    acc[a] += f64::from(d[a]);
-                }
+            let d = (x as f64 - cx).hypot(y as f64 - cy);
+            if d <= rc {
+                f(d, sig.coarse_diff[y * sig.cw + x]);
             }
         }
     }
+}
+
+/// Unit direction of the mean coarse colour difference (ball minus cloth) over the disc of
+/// radius `rho` around `c` (full-resolution pixels); `None` where it vanishes.
+pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
+    let mut acc = [0f64; 3];
+    each_coarse_within(sig, c, rho / sig.f as f64, |_, d| {
+        for a in 0..3 {
+            acc[a] += f64::from(d[a]);
+        }
+    });
     let n = (acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2]).sqrt();
     (n > 0.0).then(|| acc.map(|v| (v / n) as f32))
 }
@@ -200,28 +208,15 @@ pub fn mean_colour(sig: &Signal, c: (f64, f64), rho: f64) -> Option<[f32; 3]> {
 /// annulus holds fewer than 8 coarse pixels or the median vanishes.
 pub fn ball_colour(sig: &Signal, c: (f64, f64), r: f64) -> Option<[f32; 3]> {
     let f = sig.f as f64;
-    let (cx, cy) = (c.0 / f - 0.5, c.1 / f - 0.5);
     let (r0, r1) = (0.35 * r / f, 0.85 * r / f);
     let mut ch: [Vec<f32>; 3] = Default::default();
-    let (y0, y1) = (
-        (cy - r1).floor().max(0.0) as usize,
-        (cy + r1).ceil() as usize,
-    );
-    let (x0, x1) = (
-        (cx - r1).floor().max(0.0) as usize,
-        (cx + r1).ceil() as usize,
-    );
-    for y in y0..=y1.min(sig.ch - 1) {
-        for x in x0..=x1.min(sig.cw - 1) {
-            let d = (x as f64 - cx).hypot(y as f64 - cy);
-            if (r0..=r1).contains(&d) {
-                let v = sig.coarse_diff[y * sig.cw + x];
-                for a in 0..3 {
-                    ch[a].push(v[a]);
-                }
+    each_coarse_within(sig, c, r1, |d, v| {
+        if d >= r0 {
+            for a in 0..3 {
+                ch[a].push(v[a]);
             }
         }
-    }
+    });
     if ch[0].len() < 8 {
         return None;
     }

@@ -902,8 +902,14 @@ fn disc_at(sig: &Signal, p: (f64, f64), r: f64, contrast: f64, ring_level: f64) 
 /// near P); light that only passes through `p` (a hidden path, streaks overlapping near the
 /// impact) gives little (−0.05 to 0.26; one of 0.35), as the streaks cross both rings.
 fn rim_at(sig: &Signal, p: (f64, f64), r: f64) -> f64 {
+    rim_on(|x, y| sig.sample(x, y), p, r)
+}
+
+/// [`rim_at`] on any sampling of the photo (a [`background::Projected`] plane of another
+/// colour).
+fn rim_on(sample: impl Fn(f64, f64) -> Option<f32> + Copy, p: (f64, f64), r: f64) -> f64 {
     let mean = |rho: f64| {
-        let v = ring_samples(sig, p, rho, 72);
+        let v = ring_samples(sample, p, rho, 72);
         v.iter().map(|&x| f64::from(x)).sum::<f64>() / v.len().max(1) as f64
     };
     mean(0.5 * r) - mean(1.2 * r)
@@ -946,11 +952,16 @@ fn rest_beyond_arc(
 
 /// Signal at `n` equally spaced points of the circle of radius `rho` around `c` (those inside
 /// the image).
-fn ring_samples(sig: &Signal, c: (f64, f64), rho: f64, n: usize) -> Vec<f32> {
+fn ring_samples(
+    sample: impl Fn(f64, f64) -> Option<f32>,
+    c: (f64, f64),
+    rho: f64,
+    n: usize,
+) -> Vec<f32> {
     (0..n)
         .filter_map(|k| {
             let a = k as f64 * std::f64::consts::TAU / n as f64;
-            sig.sample(c.0 + rho * a.cos(), c.1 + rho * a.sin())
+            sample(c.0 + rho * a.cos(), c.1 + rho * a.sin())
         })
         .collect()
 }
@@ -1461,7 +1472,6 @@ fn read_candidates(
     let (mut first, mut refused) = (None::<Analysis>, None);
     let mut best_contrast = 0f64;
     // Discs read so far, with their centres and contrasts.
-    let mut read = 0usize;
     let mut read_discs: Vec<(f64, f64, f64)> = Vec::new();
     for cd in cands {
         let dsc = match refine_to_scale(sig, cd, scene_radius_px) {
@@ -1526,7 +1536,6 @@ fn read_candidates(
             c > dsc.contrast && (x - dsc.cx).hypot(y - dsc.cy) < BRIGHTER_NEAR_R * dsc.r
         });
         if a.status == Status::Ok
-            && read > 0
             && three
             && a.rest_disc.is_none()
             && let Some(&(x, y, c)) = brighter_near
@@ -1544,14 +1553,9 @@ fn read_candidates(
                 Some(f) => f.reason = why,
                 None => first = Some(Analysis::declined(Status::Declined, why)),
             }
-            read += 1;
-            read_discs.push((dsc.cx, dsc.cy, dsc.contrast));
-            continue;
-        }
-        if a.status == Status::Ok && (read == 0 || three) {
+        } else if a.status == Status::Ok && (read_discs.is_empty() || three) {
             return a;
         }
-        read += 1;
         read_discs.push((dsc.cx, dsc.cy, dsc.contrast));
         if a.status == Status::Ok {
             continue;
@@ -2037,12 +2041,16 @@ fn read_body(
     // colour shows a coloured cue ball weakly, and a white cue ball resting against a coloured
     // object ball's disc was then missed ([`REST_OVER_STREAK`]).
     let over_in_cue_colour = if cue_stopped && inc_amp > 0.0 {
-        rim_at(&sig.recoloured(colours[reading.inc]), p_imp, r) / inc_amp
+        // Sampled on the projected plane of that colour (tiles near P only), not a recoloured
+        // signal, whose whole coarse map and noise would be computed for two rings.
+        let plane = sig.projected(sig.projector(colours[reading.inc]));
+        rim_on(|x, y| plane.sample(x, y), p_imp, r) / inc_amp
     } else {
         0.0
     };
     let path_not_found = cue_stopped && over_in_cue_colour < REST_OVER_STREAK && {
-        let ring = background::median(&mut ring_samples(sig, o, 1.6 * r, 64)) as f64;
+        let ring =
+            background::median(&mut ring_samples(|x, y| sig.sample(x, y), o, 1.6 * r, 64)) as f64;
         !disc_at(sig, p_imp, r, dsc.contrast, ring)
     };
     if cue_stopped && !path_not_found {
