@@ -2093,9 +2093,9 @@ fn read_body(
         let mut ex = streak::Exclusion::default();
         // Margins: the antialiased edge (1.5 px) and, for bands, the sagitta of the sliding arc
         // between the start and the first clean sample (≤ 0.1 R).
-        ex.discs.push((o, r + 1.5));
+        ex.add_disc(o, r + 1.5);
         if let Some(q) = &creep {
-            ex.discs.push(((q.cx, q.cy), r + 1.5));
+            ex.add_disc((q.cx, q.cy), r + 1.5);
         }
         for &b in roles.iter().filter(|&&b| b != a) {
             let mut pts = vec![start_of(b)];

@@ -12,6 +12,8 @@
 //! centre-line (sweep `∝ sqrt(R² - d²)`, shaded `∝ R² - d²`, blur) this is unbiased; its standard
 //! error is `σ_c² = Σ (t - c)² σ_n² / (Σ s)²` with `σ_n` the flank scatter.
 
+use std::sync::OnceLock;
+
 use super::background::{Signal, mad_sigma, mad_sigma_about};
 
 #[derive(Debug, Clone)]
@@ -864,12 +866,14 @@ impl Template {
         // into the matrices, without their indexing in the loop over the profile).
         {
             let (mut ms, mut rs) = ([[0.0; K]; K], [0.0; K]);
+            // The loops run to the fixed `K`: entries beyond `k` sum exact zeros and are not
+            // read, and fixed bounds let the compiler unroll them.
             for (tk, vk, f) in &rows {
                 let mut g = *f;
                 g[1] = self.at(tk - c0).0;
-                for a in 1..k {
+                for a in 1..K {
                     rs[a - 1] += g[a] * vk;
-                    for bb in a..k {
+                    for bb in a..K {
                         ms[a - 1][bb - 1] += g[a] * g[bb];
                     }
                 }
@@ -894,9 +898,9 @@ impl Template {
                 j[1] = tv;
                 let model: f64 = (1..k).map(|q| p[q] * j[q]).sum();
                 let e = vk - model;
-                for a in 0..k {
+                for a in 0..K {
                     bs[a] += j[a] * e;
-                    for bb in a..k {
+                    for bb in a..K {
                         ms[a][bb] += j[a] * j[bb];
                     }
                 }
@@ -1080,10 +1084,143 @@ fn walk(
 
 /// Regions where another ball's light falls: bands of half-width `half` around polylines, and
 /// discs.
+///
+/// [`Exclusion::contains`] is asked for every pixel of a profile and of an incoming block, and
+/// a band along a streak across the photo has some twenty segments, so the shapes are indexed
+/// by a grid of cells one reach wide (built on first use): a point is tested only against the
+/// shapes whose bounding box meets its cell, with the same comparisons as without the grid, so
+/// the answer is the same to the bit.
 #[derive(Debug, Clone, Default)]
 pub struct Exclusion {
-    pub bands: Vec<(Vec<(f64, f64)>, f64)>,
-    pub discs: Vec<((f64, f64), f64)>,
+    bands: Vec<(Vec<(f64, f64)>, f64)>,
+    discs: Vec<((f64, f64), f64)>,
+    grid: OnceLock<Grid>,
+}
+
+/// One shape of an [`Exclusion`]: a disc (centre, radius) or one segment of a band (its ends
+/// and half-width).
+#[derive(Debug, Clone, Copy)]
+enum Shape {
+    Disc((f64, f64), f64),
+    Segment((f64, f64), (f64, f64), f64),
+}
+
+impl Shape {
+    fn contains(&self, x: f64, y: f64) -> bool {
+        match *self {
+            Shape::Disc(c, rr) => (x - c.0).powi(2) + (y - c.1).powi(2) < rr * rr,
+            Shape::Segment(a, b, h) => seg_dist2((x, y), a, b) < h * h,
+        }
+    }
+
+    /// Box outside which no point is contained: `(x0, y0, x1, y1)`.
+    fn bounds(&self) -> (f64, f64, f64, f64) {
+        match *self {
+            Shape::Disc(c, rr) => (c.0 - rr, c.1 - rr, c.0 + rr, c.1 + rr),
+            Shape::Segment(a, b, h) => (
+                a.0.min(b.0) - h,
+                a.1.min(b.1) - h,
+                a.0.max(b.0) + h,
+                a.1.max(b.1) + h,
+            ),
+        }
+    }
+}
+
+/// The shapes of an [`Exclusion`] listed per grid cell (compressed rows: cell `k` holds
+/// `shapes[index[start[k]..start[k + 1]]]`).
+#[derive(Debug, Clone)]
+struct Grid {
+    x0: f64,
+    y0: f64,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    start: Vec<usize>,
+    index: Vec<usize>,
+    shapes: Vec<Shape>,
+}
+
+impl Grid {
+    fn new(shapes: Vec<Shape>) -> Grid {
+        let bounds: Vec<(f64, f64, f64, f64)> = shapes.iter().map(Shape::bounds).collect();
+        let reach = shapes
+            .iter()
+            .map(|s| match *s {
+                Shape::Disc(_, r) | Shape::Segment(_, _, r) => r,
+            })
+            .fold(1.0, f64::max);
+        let (x0, y0, x1, y1) = bounds.iter().fold(
+            (
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ),
+            |a, b| (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2), a.3.max(b.3)),
+        );
+        if shapes.is_empty() || !(x1 >= x0 && y1 >= y0) {
+            return Grid {
+                x0: 0.0,
+                y0: 0.0,
+                cell: 1.0,
+                nx: 0,
+                ny: 0,
+                start: vec![0],
+                index: Vec::new(),
+                shapes,
+            };
+        }
+        let cell = reach;
+        let nx = ((x1 - x0) / cell).floor() as usize + 1;
+        let ny = ((y1 - y0) / cell).floor() as usize + 1;
+        let span = |lo: f64, hi: f64, o: f64, n: usize| {
+            let a = (((lo - o) / cell).floor().max(0.0) as usize).min(n - 1);
+            let b = (((hi - o) / cell).floor().max(0.0) as usize).min(n - 1);
+            a..=b
+        };
+        let mut lists: Vec<Vec<usize>> = vec![Vec::new(); nx * ny];
+        for (i, b) in bounds.iter().enumerate() {
+            for cy in span(b.1, b.3, y0, ny) {
+                for cx in span(b.0, b.2, x0, nx) {
+                    lists[cy * nx + cx].push(i);
+                }
+            }
+        }
+        let mut start = Vec::with_capacity(nx * ny + 1);
+        let mut index = Vec::new();
+        start.push(0);
+        for l in &lists {
+            index.extend_from_slice(l);
+            start.push(index.len());
+        }
+        Grid {
+            x0,
+            y0,
+            cell,
+            nx,
+            ny,
+            start,
+            index,
+            shapes,
+        }
+    }
+
+    fn contains(&self, x: f64, y: f64) -> bool {
+        let (fx, fy) = ((x - self.x0) / self.cell, (y - self.y0) / self.cell);
+        // Outside the union of the shapes' boxes (or NaN): in none of them.
+        if !(fx >= 0.0 && fy >= 0.0) {
+            return false;
+        }
+        let (cx, cy) = (fx.floor() as usize, fy.floor() as usize);
+        if cx >= self.nx || cy >= self.ny {
+            return false;
+        }
+        let k = cy * self.nx + cx;
+        self.index[self.start[k]..self.start[k + 1]]
+            .iter()
+            .any(|&i| self.shapes[i].contains(x, y))
+    }
 }
 
 /// Squared distance from `p` to the segment `a → b`.
@@ -1101,6 +1238,20 @@ pub(super) fn seg_dist2(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
 
 impl Exclusion {
     pub fn contains(&self, x: f64, y: f64) -> bool {
+        self.grid
+            .get_or_init(|| {
+                let discs = self.discs.iter().map(|&(c, rr)| Shape::Disc(c, rr));
+                let segments = self.bands.iter().flat_map(|(pts, h)| {
+                    pts.windows(2).map(move |w| Shape::Segment(w[0], w[1], *h))
+                });
+                Grid::new(discs.chain(segments).collect())
+            })
+            .contains(x, y)
+    }
+
+    /// The same test without the grid: every shape in turn (the definition the grid must meet).
+    #[cfg(test)]
+    fn contains_by_scan(&self, x: f64, y: f64) -> bool {
         self.discs
             .iter()
             .any(|(c, rr)| (x - c.0).powi(2) + (y - c.1).powi(2) < rr * rr)
@@ -1108,6 +1259,12 @@ impl Exclusion {
                 pts.windows(2)
                     .any(|w| seg_dist2((x, y), w[0], w[1]) < h * h)
             })
+    }
+
+    /// Adds a disc of radius `rr` about `c`.
+    pub fn add_disc(&mut self, c: (f64, f64), rr: f64) {
+        self.discs.push((c, rr));
+        self.grid = OnceLock::new();
     }
 
     /// Adds a band along `pts`, decimated to vertices about `step` apart (paths are smooth on
@@ -1125,6 +1282,7 @@ impl Exclusion {
         }
         if out.len() >= 2 {
             self.bands.push((out, half));
+            self.grid = OnceLock::new();
         }
     }
 }
@@ -1236,6 +1394,49 @@ mod tests {
     use super::*;
     use crate::vision::background;
     use crate::vision::image_io::RgbImage;
+
+    proptest::proptest! {
+        /// The grid answers as the scan over every shape does, on random discs and bands and on
+        /// points drawn near their edges, on cell seams and far outside.
+        #[test]
+        fn the_exclusion_grid_answers_as_the_scan_over_every_shape(
+            discs in proptest::collection::vec(((0.0f64..800.0, 0.0f64..600.0), 1.0f64..150.0), 0..3),
+            bands in proptest::collection::vec(
+                (proptest::collection::vec((0.0f64..800.0, 0.0f64..600.0), 2..12), 1.0f64..130.0),
+                0..3,
+            ),
+            points in proptest::collection::vec((-200.0f64..1000.0, -200.0f64..800.0), 200),
+        ) {
+            let mut ex = Exclusion::default();
+            for &(c, rr) in &discs {
+                ex.add_disc(c, rr);
+            }
+            for (pts, h) in &bands {
+                ex.add_band(pts, *h, 40.0);
+            }
+            let mut probe: Vec<(f64, f64)> = points.clone();
+            // Points on the edges: a disc's rim, a band's edge, a cell's seam.
+            for &(c, rr) in &discs {
+                probe.push((c.0 + rr, c.1));
+                probe.push((c.0, c.1 - rr));
+            }
+            for (pts, h) in &ex.bands {
+                probe.push((pts[0].0, pts[0].1 + h));
+                probe.push((pts[pts.len() - 1].0 - h, pts[pts.len() - 1].1));
+            }
+            ex.contains(0.0, 0.0);
+            let g = ex.grid.get().expect("built by the query above");
+            probe.push((g.x0 + g.cell, g.y0 + 2.0 * g.cell));
+            probe.push((g.x0, g.y0));
+            probe.push((f64::NAN, 10.0));
+            for &(x, y) in &probe {
+                proptest::prop_assert_eq!(ex.contains(x, y), ex.contains_by_scan(x, y), "at ({}, {})", x, y);
+            }
+            // A shape added after a query is seen.
+            ex.add_disc((5000.0, 5000.0), 10.0);
+            proptest::prop_assert!(ex.contains(5001.0, 5002.0));
+        }
+    }
 
     #[test]
     fn empty_template_bins_are_filled_from_their_neighbours() {
