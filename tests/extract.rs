@@ -1267,6 +1267,29 @@ fn a_swapped_reading_of_two_resting_balls_must_beat_the_first_ones_time_arrow() 
 }
 
 #[test]
+fn the_incoming_line_is_not_measured_on_a_resting_cue_balls_light() {
+    // Near head-on realistic seed 919's shot_019 (billiard, psi 0.86°, a draw shot): the white
+    // cue ball was drawn back about 1.5 R and stopped, and its faint incoming streak was not
+    // found beyond that light. Until session 32 the 21 incoming samples, all in the resting
+    // ball's light 0–2 R from `P`, gave the incoming line: `ok` at psi 2.36° ± 0.24°. Samples
+    // there measure where the ball came to rest; the line must come from the streak beyond.
+    let (shot, t) = one_of_24_with(
+        "rest_light",
+        "realistic",
+        919,
+        NEAR_HEAD_ON_MIXED,
+        "shot_019.jpg",
+    );
+    assert_declined_photo(&shot, &t[&shot.file], 0.86);
+    assert!(
+        shot.reason
+            .contains("its incoming streak is not found beyond 2.5 R"),
+        "{}",
+        shot.reason
+    );
+}
+
+#[test]
 fn a_cue_ball_resting_at_p_is_seen_in_its_own_colour() {
     // Near head-on realistic seed 911's shot_003 (rubber, psi 6.12°, a stun shot): the white cue
     // ball rests against the purple object ball's disc. The reading took the white ball for the

@@ -1027,6 +1027,17 @@ const INCOMING_ARROW_MAX: f64 = 1.0;
 /// Fraction of the object disc's contrast that [`rim_at`] must reach for a ball at rest at P.
 const REST_RIM: f64 = 0.3;
 
+/// Distance from P (in R) within which a cue ball resting at P lights the incoming streak's
+/// centre-line: its own disc reaches 1 R, a drawn ball's short way back to rest a little more
+/// (2 R on near head-on realistic 919 shot_019). Beyond it the streak's own light is measured.
+const REST_LIGHT_CLEAR_R: f64 = 2.5;
+
+/// Multiple of the incoming streak's light (the median amplitude of its samples beyond
+/// [`REST_LIGHT_CLEAR_R`]) above which a sample within that distance is the resting ball's:
+/// a ball at rest for a good part of the exposure is some ten times brighter than its streak,
+/// the same factor [`REST_OVER_STREAK`] asks of its rim.
+const REST_LIGHT_OVER: f64 = 3.0;
+
 /// Multiple of the incoming streak's light (its samples' median amplitude) that [`rim_at`] at P
 /// must reach for the ball that painted it to rest there, whatever the disc's colour. A ball at
 /// rest for the rest of the exposure is several times as bright as its own streak, whose
@@ -2210,6 +2221,44 @@ fn read_body(
             };
         }
     }
+    // A cue ball resting at or near P paints a disc (drawn back, also the short way to it) some
+    // ten times brighter than its incoming streak, and the centre-line samples in that light
+    // measure where the ball came to rest, not the line it arrived on, at a sigma as small as the
+    // streak's: near head-on realistic 919 shot_019, a drawn cue ball resting just behind P,
+    // whose light gave all 21 incoming samples, read psi 1.5° off at a stated 0.24°. The
+    // incoming line is measured on the streak's own light beyond it (the time arrows above keep
+    // every sample: they decided the roles of the two resting balls with them).
+    let mut rest_reach = None;
+    if cue_at_rest {
+        let dist = |q: &Sample| (q.x - p_imp.0).hypot(q.y - p_imp.1) / r;
+        let mut far: Vec<f32> = measured[reading.inc]
+            .iter()
+            .filter(|q| dist(q) >= REST_LIGHT_CLEAR_R)
+            .map(|q| q.amp as f32)
+            .collect();
+        if far.len() < 5 {
+            out.reason = format!(
+                "the cue ball rests at the impact but its incoming streak is not found beyond \
+                 {REST_LIGHT_CLEAR_R} R of it (only the resting ball's light)"
+            );
+            return out;
+        }
+        let level = f64::from(background::median(&mut far));
+        let (rest, streak): (Vec<Sample>, Vec<Sample>) = measured[reading.inc]
+            .iter()
+            .partition(|q| dist(q) < REST_LIGHT_CLEAR_R && q.amp > REST_LIGHT_OVER * level);
+        rest_reach = rest.iter().map(dist).reduce(f64::max);
+        if debug {
+            eprintln!(
+                "resting cue ball: {} incoming samples in its light (to {:?} R), {} kept, streak \
+                 level {level:.4}",
+                rest.len(),
+                rest_reach,
+                streak.len()
+            );
+        }
+        measured[reading.inc] = streak;
+    }
     // The incoming line from its pixels, block by block (`linefit`): at a few grey levels of
     // contrast the profile-by-profile samples scatter several times their sigma.
     let t_blocks = std::time::Instant::now();
@@ -2222,7 +2271,13 @@ fn read_body(
             &line,
             p_imp,
             r,
-            &exclusion_for(reading.inc),
+            &{
+                let mut ex = exclusion_for(reading.inc);
+                if let Some(reach) = rest_reach {
+                    ex.add_disc(p_imp, (reach + 0.1) * r);
+                }
+                ex
+            },
             colours[reading.inc],
             len,
         )
