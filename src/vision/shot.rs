@@ -2231,10 +2231,10 @@ fn read_body(
     let mut rest_reach = None;
     if cue_at_rest {
         let dist = |q: &Sample| (q.x - p_imp.0).hypot(q.y - p_imp.1) / r;
-        let mut far: Vec<f32> = measured[reading.inc]
+        let far: Vec<Sample> = measured[reading.inc]
             .iter()
             .filter(|q| dist(q) >= REST_LIGHT_CLEAR_R)
-            .map(|q| q.amp as f32)
+            .copied()
             .collect();
         if far.len() < 5 {
             out.reason = format!(
@@ -2243,7 +2243,7 @@ fn read_body(
             );
             return out;
         }
-        let level = f64::from(background::median(&mut far));
+        let level = median_amp(&far);
         let (rest, streak): (Vec<Sample>, Vec<Sample>) = measured[reading.inc]
             .iter()
             .partition(|q| dist(q) < REST_LIGHT_CLEAR_R && q.amp > REST_LIGHT_OVER * level);
