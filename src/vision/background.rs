@@ -19,7 +19,7 @@
 //! nothing, as it should: its light then differs from the cloth only as a blotch does.
 
 use super::image_io::RgbImage;
-use super::texture::ClothTexture;
+use super::texture::{BLOCK as TEXTURE_BLOCK, ClothTexture};
 use nalgebra::{DMatrix, DVector};
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -29,11 +29,15 @@ use std::sync::{Arc, Mutex, OnceLock};
 pub struct Signal<'a> {
     pub w: usize,
     pub h: usize,
-    /// Full-resolution RGB (minus the plate when there is one), interleaved; projections on a
-    /// ball's colour direction are taken where sampled, and local baselines are subtracted where
-    /// used, so the cloth surface need not be evaluated at full resolution. Borrowed from the
-    /// photo when nothing is subtracted (a 2400×1600 copy is 46 MB of page faults).
+    /// Full-resolution RGB of the photo, interleaved; projections on a ball's colour direction
+    /// are taken where sampled (after the cloth's fixed part, [`Signal::fixed`], is taken off),
+    /// and local baselines are subtracted where used, so the cloth surface need not be
+    /// evaluated at full resolution.
     pub rgb: std::borrow::Cow<'a, [f32]>,
+    /// The cloth's fixed part, taken off each pixel where it is read: a copy of the photo minus
+    /// a plate or a texture map would be 46 MB of page faults at 2400×1600 (13 ms a photo),
+    /// for the few per cent of its pixels the samplers read.
+    pub fixed: Fixed<'a>,
     /// Downsampling factor of the coarse grid.
     pub f: usize,
     pub cw: usize,
@@ -83,6 +87,74 @@ fn bilinear_cell(x: f64, y: f64, w: usize, h: usize) -> Option<(usize, usize, f3
     Some((x0, y0, (x - x0 as f64) as f32, (y - y0 as f64) as f32))
 }
 
+/// What is taken off every full-resolution pixel before it is read ([`Signal::rgb`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub enum Fixed<'a> {
+    /// Nothing (the cloth surface is subtracted coarsely, where the signal is used).
+    #[default]
+    None,
+    /// A plate of the empty table, interleaved as the photo.
+    Plate(&'a [f32]),
+    /// The folder's cloth texture.
+    Texture(&'a ClothTexture),
+}
+
+impl Fixed<'_> {
+    /// Pixel `(x, y)` of the photo `rgb` (`w` wide) minus the fixed part, channel by channel:
+    /// the same `f32` differences a subtracted copy of the photo would hold.
+    #[inline]
+    pub fn pixel(&self, rgb: &[f32], w: usize, x: usize, y: usize) -> [f32; 3] {
+        let k = 3 * (y * w + x);
+        let v = [rgb[k], rgb[k + 1], rgb[k + 2]];
+        match self {
+            Fixed::None => v,
+            Fixed::Plate(p) => [v[0] - p[k], v[1] - p[k + 1], v[2] - p[k + 2]],
+            Fixed::Texture(t) => {
+                let tv = t.at(x, y);
+                [v[0] - tv[0], v[1] - tv[1], v[2] - tv[2]]
+            }
+        }
+    }
+
+    /// Pixels `x0..x1` of row `y` minus the fixed part, into `out` (interleaved); returns the
+    /// row itself, without a copy, when nothing is subtracted.
+    pub fn row<'r>(
+        &self,
+        rgb: &'r [f32],
+        w: usize,
+        y: usize,
+        (x0, x1): (usize, usize),
+        out: &'r mut Vec<f32>,
+    ) -> &'r [f32] {
+        let src = &rgb[3 * (y * w + x0)..3 * (y * w + x1)];
+        match self {
+            Fixed::None => src,
+            Fixed::Plate(p) => {
+                let q = &p[3 * (y * w + x0)..3 * (y * w + x1)];
+                out.resize(src.len(), 0.0);
+                for ((o, v), q) in out.iter_mut().zip(src).zip(q) {
+                    *o = v - q;
+                }
+                out
+            }
+            Fixed::Texture(t) => {
+                let trow = t.row(y);
+                out.resize(src.len(), 0.0);
+                for ((x, o), v) in (x0..x1)
+                    .zip(out.chunks_exact_mut(3))
+                    .zip(src.chunks_exact(3))
+                {
+                    let tv = trow[(x / TEXTURE_BLOCK).min(trow.len() - 1)];
+                    o[0] = v[0] - tv[0];
+                    o[1] = v[1] - tv[1];
+                    o[2] = v[2] - tv[2];
+                }
+                out
+            }
+        }
+    }
+}
+
 /// Projected full-resolution planes by projector, computed on first use.
 #[derive(Debug, Clone, Default)]
 pub struct PlaneCache(Arc<Mutex<Vec<Arc<Tiles>>>>);
@@ -108,6 +180,7 @@ pub struct Projected<'s> {
     w: usize,
     h: usize,
     rgb: &'s [f32],
+    fixed: Fixed<'s>,
     tiles: Arc<Tiles>,
 }
 
@@ -130,10 +203,13 @@ impl Projected<'_> {
     fn tile(&self, tx: usize, ty: usize) -> Box<[f32]> {
         let u = self.tiles.u;
         let mut z = vec![0.0f32; (TILE + 1) * (TILE + 1)];
+        let mut buf = Vec::with_capacity(3 * (TILE + 1));
         for (j, row) in z.chunks_exact_mut(TILE + 1).enumerate() {
             let y = (ty * TILE + j).min(self.h - 1);
             let x_end = (tx * TILE + TILE + 1).min(self.w);
-            let src = &self.rgb[3 * (y * self.w + tx * TILE)..3 * (y * self.w + x_end)];
+            let src = self
+                .fixed
+                .row(self.rgb, self.w, y, (tx * TILE, x_end), &mut buf);
             for (o, c) in row.iter_mut().zip(src.chunks_exact(3)) {
                 *o = u[0] * c[0] + u[1] * c[1] + u[2] * c[2];
             }
@@ -160,13 +236,12 @@ impl Signal<'_> {
     #[inline]
     pub fn sample_u(&self, x: f64, y: f64, u: [f32; 3]) -> Option<f32> {
         let (x0, y0, fx, fy) = bilinear_cell(x, y, self.w, self.h)?;
-        let v = |i: usize| {
-            let k = 3 * i;
-            u[0] * self.rgb[k] + u[1] * self.rgb[k + 1] + u[2] * self.rgb[k + 2]
+        let v = |x: usize, y: usize| {
+            let c = self.fixed.pixel(&self.rgb, self.w, x, y);
+            u[0] * c[0] + u[1] * c[1] + u[2] * c[2]
         };
-        let i = y0 * self.w + x0;
-        let a = v(i) + fx * (v(i + 1) - v(i));
-        let b = v(i + self.w) + fx * (v(i + self.w + 1) - v(i + self.w));
+        let a = v(x0, y0) + fx * (v(x0 + 1, y0) - v(x0, y0));
+        let b = v(x0, y0 + 1) + fx * (v(x0 + 1, y0 + 1) - v(x0, y0 + 1));
         Some(a + fy * (b - a))
     }
 
@@ -196,6 +271,7 @@ impl Signal<'_> {
             w: self.w,
             h: self.h,
             rgb: &self.rgb,
+            fixed: self.fixed,
             tiles,
         }
     }
@@ -236,6 +312,7 @@ impl Signal<'_> {
             w: self.w,
             h: self.h,
             rgb: std::borrow::Cow::Borrowed(&self.rgb),
+            fixed: self.fixed,
             f: self.f,
             cw: self.cw,
             ch: self.ch,
@@ -266,7 +343,14 @@ pub fn saturated_fraction(img: &RgbImage) -> f64 {
 }
 
 pub(crate) fn block_mean(img: &RgbImage, f: usize) -> (usize, usize, Vec<[f32; 3]>) {
+    block_mean_fixed(img, Fixed::None, f)
+}
+
+/// [`block_mean`] of the photo minus the cloth's fixed part, to the bit what it gives for a
+/// subtracted copy of the photo (each row is subtracted into a buffer, then summed as one).
+fn block_mean_fixed(img: &RgbImage, fixed: Fixed, f: usize) -> (usize, usize, Vec<[f32; 3]>) {
     let (cw, ch) = (img.w / f, img.h / f);
+    let mut buf = Vec::with_capacity(3 * img.w);
     let mut out = vec![[0f32; 3]; cw * ch];
     let norm = 1.0 / (f * f) as f32;
     // Each block's sums take its pixels in the same order (row by row, left to right), four
@@ -276,7 +360,7 @@ pub(crate) fn block_mean(img: &RgbImage, f: usize) -> (usize, usize, Vec<[f32; 3
     for cy in 0..ch {
         let blocks = &mut out[cy * cw..(cy + 1) * cw];
         for y in cy * f..cy * f + f {
-            let row = &img.data[3 * y * img.w..3 * (y + 1) * img.w];
+            let row = fixed.row(&img.data, img.w, y, (0, img.w), &mut buf);
             let mut quads = blocks.chunks_exact_mut(LANES);
             for (q, group) in (&mut quads).enumerate() {
                 let mut acc: [[f32; 3]; LANES] = [group[0], group[1], group[2], group[3]];
@@ -415,11 +499,41 @@ pub fn mahalanobis_norm(b: [f32; 3], ci: &[[f64; 3]; 3]) -> f32 {
 /// inside that ellipsoid). Regularised by 1e-6 of its trace (a grey image has equal channels,
 /// hence a singular covariance). Returns its inverse.
 pub fn robust_cov_inv(d: &[[f32; 3]]) -> [[f64; 3]; 3] {
+    robust_cov_inv_from(d, &ChannelSpread::of(d))
+}
+
+/// Each channel's median and MAD sigma ([`mad_sigma`]) of colour differences: the cloth
+/// model's scatter test, the noise of each channel and the start of [`robust_cov_inv`] all
+/// read them, and each is two selections over the whole coarse grid.
+#[derive(Debug, Clone, Copy)]
+struct ChannelSpread {
+    median: [f32; 3],
+    sigma: [f32; 3],
+}
+
+impl ChannelSpread {
+    fn of(d: &[[f32; 3]]) -> Self {
+        let mut median = [0f32; 3];
+        let mut sigma = [0f32; 3];
+        for c in 0..3 {
+            let v: Vec<f32> = d.iter().map(|x| x[c]).collect();
+            median[c] = median_of(&v);
+            sigma[c] = mad_sigma_about(&v, median[c]);
+        }
+        ChannelSpread { median, sigma }
+    }
+
+    /// The summed sigmas: how much the cloth residual scatters.
+    fn scatter(&self) -> f32 {
+        self.sigma.iter().sum()
+    }
+}
+
+/// [`robust_cov_inv`] with the channels' medians and MAD sigmas already known.
+fn robust_cov_inv_from(d: &[[f32; 3]], spread: &ChannelSpread) -> [[f64; 3]; 3] {
     use nalgebra::{Matrix3, Vector3};
-    let chans: [Vec<f32>; 3] = [0, 1, 2].map(|c| d.iter().map(|v| v[c]).collect());
-    let med: [f64; 3] = [0, 1, 2].map(|c| median_of(&chans[c]) as f64);
-    let sd: [f64; 3] =
-        [0, 1, 2].map(|c| (mad_sigma_about(&chans[c], med[c] as f32) as f64).max(1e-9));
+    let med: [f64; 3] = spread.median.map(f64::from);
+    let sd: [f64; 3] = spread.sigma.map(|s| f64::from(s).max(1e-9));
     let mut inv = Matrix3::from_diagonal(&Vector3::new(
         1.0 / (sd[0] * sd[0]),
         1.0 / (sd[1] * sd[1]),
@@ -659,16 +773,10 @@ fn residual_of(c_img: &[[f32; 3]], bg: &[[f32; 3]]) -> Vec<[f32; 3]> {
         .collect()
 }
 
-fn scatter(diff: &[[f32; 3]]) -> f32 {
-    (0..3)
-        .map(|c| mad_sigma(&diff.iter().map(|d| d[c]).collect::<Vec<_>>()))
-        .sum()
-}
-
 /// Builds the ball signal of a photo with the given cloth model.
 pub fn build<'a>(
     img: &'a RgbImage,
-    cloth: Cloth,
+    cloth: Cloth<'a>,
     coarse_side: usize,
 ) -> Result<Signal<'a>, String> {
     let plate = match cloth {
@@ -687,37 +795,30 @@ pub fn build<'a>(
     let (cw, ch, c_img) = block_mean(img, f);
     // `plain`: the residual from the photo's own surface, whose colour covariance is also used
     // with a texture (see below).
-    let (diff, plain, textured, model) = match cloth {
-        Cloth::Plate(p) => (
-            residual_of(&c_img, &block_mean(p, f).2),
-            None,
-            None,
-            ClothModel::Plate,
-        ),
-        Cloth::Surface => (
-            residual_of(&c_img, &fit_cloth_surface(cw, ch, &c_img)),
-            None,
-            None,
-            ClothModel::Surface,
-        ),
+    // `diff` and its channels' spread; `plain` (with its spread) where a texture is used.
+    let plain_of = |c_img: &[[f32; 3]]| {
+        let d = residual_of(c_img, &fit_cloth_surface(cw, ch, c_img));
+        let s = ChannelSpread::of(&d);
+        (d, s)
+    };
+    let ((diff, spread), plain, fixed, model) = match cloth {
+        Cloth::Plate(p) => {
+            let d = residual_of(&c_img, &block_mean(p, f).2);
+            let s = ChannelSpread::of(&d);
+            ((d, s), None, Fixed::Plate(&p.data), ClothModel::Plate)
+        }
+        Cloth::Surface => (plain_of(&c_img), None, Fixed::None, ClothModel::Surface),
         Cloth::Texture(t) => {
-            let plain = residual_of(&c_img, &fit_cloth_surface(cw, ch, &c_img));
+            let plain = plain_of(&c_img);
             if t.fits(img) {
-                let data = t.subtract(img);
-                let timg = RgbImage {
-                    w: img.w,
-                    h: img.h,
-                    data,
-                };
-                let c2 = block_mean(&timg, f).2;
-                let with = residual_of(&c2, &fit_cloth_surface(cw, ch, &c2));
-                if scatter(&with) < scatter(&plain) {
-                    (with, Some(plain), Some(timg.data), ClothModel::Texture)
+                let with = plain_of(&block_mean_fixed(img, Fixed::Texture(t), f).2);
+                if with.1.scatter() < plain.1.scatter() {
+                    (with, Some(plain), Fixed::Texture(t), ClothModel::Texture)
                 } else {
-                    (plain, None, None, ClothModel::Surface)
+                    (plain, None, Fixed::None, ClothModel::Surface)
                 }
             } else {
-                (plain, None, None, ClothModel::Surface)
+                (plain, None, Fixed::None, ClothModel::Surface)
             }
         }
     };
@@ -726,9 +827,7 @@ pub fn build<'a>(
         .zip(&diff)
         .map(|(a, d)| [a[0] - d[0], a[1] - d[1], a[2] - d[2]])
         .collect();
-    let sig_c: Vec<f32> = (0..3)
-        .map(|c| mad_sigma(&diff.iter().map(|d| d[c]).collect::<Vec<_>>()).max(1e-5))
-        .collect();
+    let sig_c: [f32; 3] = spread.sigma.map(|s| s.max(1e-5));
     // Colour direction of the balls: mean difference of clearly non-cloth pixels.
     let mut acc = [0f64; 3];
     let mut n_sig = 0usize;
@@ -753,11 +852,14 @@ pub fn build<'a>(
     // With a texture, the colour weights come from the untextured residual: the texture map is
     // blank where the object ball waits in most shots, and there, near the impact, the weights
     // must still turn away from the cloth's brightness blotches.
-    let cov_inv = robust_cov_inv(plain.as_deref().unwrap_or(&diff));
+    let cov_inv = match &plain {
+        Some((d, s)) => robust_cov_inv_from(d, s),
+        None => robust_cov_inv_from(&diff, &spread),
+    };
     // The smooth surface (or the plate), without the texture map's blotches.
     let cloth_brightness: Vec<f32> = c_img
         .iter()
-        .zip(plain.as_deref().unwrap_or(&diff))
+        .zip(plain.as_ref().map_or(&diff, |p| &p.0))
         .map(|(a, d)| (a[0] - d[0] + a[1] - d[1] + a[2] - d[2]) / 3.0)
         .collect();
     let proj = projector(&cov_inv, u);
@@ -766,11 +868,6 @@ pub fn build<'a>(
         .map(|d| proj[0] * d[0] + proj[1] * d[1] + proj[2] * d[2])
         .collect();
     let sigma_coarse = mad_sigma(&coarse).max(1e-6);
-    let rgb = match (textured, plate) {
-        (Some(d), _) => d.into(),
-        (None, Some(p)) => img.data.iter().zip(&p.data).map(|(v, q)| v - q).collect(),
-        (None, None) => img.data.as_slice().into(),
-    };
     let mut bl: Vec<f32> = bg
         .iter()
         .map(|b| u[0] * b[0] + u[1] * b[1] + u[2] * b[2])
@@ -783,7 +880,8 @@ pub fn build<'a>(
     Ok(Signal {
         w: img.w,
         h: img.h,
-        rgb,
+        rgb: img.data.as_slice().into(),
+        fixed,
         f,
         cw,
         ch,
@@ -839,18 +937,13 @@ pub fn box_blur(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
 mod tests {
     use proptest::prelude::*;
 
-    /// The tiled projected plane samples exactly what `sample_u` forms, to the last bit: on
-    /// tile seams (64 px), on the last row and column a sample may use, and outside.
-    #[test]
-    fn projected_planes_sample_bit_identically_to_the_interleaved_pixels() {
-        let (w, h) = (203, 130);
-        let rgb: Vec<f32> = (0..w * h * 3)
-            .map(|i| ((i * 7919) % 1013) as f32 / 1013.0 - 0.3)
-            .collect();
-        let sig = super::Signal {
+    /// A signal over full-resolution pixels `rgb` only (its coarse grid a single cell).
+    fn test_signal(w: usize, h: usize, rgb: Vec<f32>, fixed: super::Fixed) -> super::Signal {
+        super::Signal {
             w,
             h,
             rgb: rgb.into(),
+            fixed,
             f: 1,
             cw: 1,
             ch: 1,
@@ -865,7 +958,18 @@ mod tests {
             cloth_brightness: vec![1.0].into(),
             cloth: super::ClothModel::Surface,
             planes: super::PlaneCache::default(),
-        };
+        }
+    }
+
+    /// The tiled projected plane samples exactly what `sample_u` forms, to the last bit: on
+    /// tile seams (64 px), on the last row and column a sample may use, and outside.
+    #[test]
+    fn projected_planes_sample_bit_identically_to_the_interleaved_pixels() {
+        let (w, h) = (203, 130);
+        let rgb: Vec<f32> = (0..w * h * 3)
+            .map(|i| ((i * 7919) % 1013) as f32 / 1013.0 - 0.3)
+            .collect();
+        let sig = test_signal(w, h, rgb, super::Fixed::None);
         let u = [0.9f32, -0.2, 0.35];
         let plane = sig.projected(u);
         let mut xs: Vec<f64> = vec![0.0, 0.25, 63.0, 63.5, 63.999, 64.0, 127.7, 128.0, 201.0];
@@ -885,6 +989,93 @@ mod tests {
         let again = recoloured.projected(u);
         assert_eq!(again.sample(100.3, 70.6), plane.sample(100.3, 70.6));
         assert_eq!(sig.planes.0.lock().unwrap().len(), 1);
+    }
+
+    /// The cloth's fixed part taken off where pixels are read gives, to the bit, what a
+    /// subtracted copy of the photo gives: block means, single pixels, projected tiles and the
+    /// interleaved sampler, for a plate and for a texture map whose cells do not divide the
+    /// photo (its last row and column of cells reach the edge).
+    #[test]
+    fn the_fixed_cloth_taken_off_on_reading_is_the_subtracted_copy() {
+        use super::super::image_io::RgbImage;
+        use super::super::texture::ClothTexture;
+        use super::{Fixed, block_mean, block_mean_fixed};
+        let (w, h) = (203, 131);
+        let px = |i: usize, k: usize| ((i * k) % 1009) as f32 / 1009.0 - 0.2;
+        let img = RgbImage {
+            w,
+            h,
+            data: (0..3 * w * h).map(|i| px(i, 7919)).collect(),
+        };
+        let plate: Vec<f32> = (0..3 * w * h).map(|i| 0.5 * px(i, 104_729)).collect();
+        let (tw, th) = (w / 2, h / 2);
+        let tex = ClothTexture {
+            w,
+            h,
+            tw,
+            th,
+            t: (0..tw * th)
+                .map(|i| [0, 1, 2].map(|c| 0.1 * px(3 * i + c, 6151)))
+                .collect(),
+            coverage: 1.0,
+            images: 8,
+        };
+        let by_copy = |fixed: Fixed| -> Vec<f32> {
+            (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .flat_map(|(x, y)| {
+                    let k = 3 * (y * w + x);
+                    let v = &img.data[k..k + 3];
+                    let m = match fixed {
+                        Fixed::None => [0.0; 3],
+                        Fixed::Plate(p) => [p[k], p[k + 1], p[k + 2]],
+                        Fixed::Texture(t) => {
+                            t.t[(y / 2).min(t.th - 1) * t.tw + (x / 2).min(t.tw - 1)]
+                        }
+                    };
+                    [v[0] - m[0], v[1] - m[1], v[2] - m[2]]
+                })
+                .collect()
+        };
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for fixed in [Fixed::None, Fixed::Plate(&plate), Fixed::Texture(&tex)] {
+            let copy = RgbImage {
+                w,
+                h,
+                data: by_copy(fixed),
+            };
+            for f in [2, 4, 5] {
+                let (a, b) = (block_mean_fixed(&img, fixed, f).2, block_mean(&copy, f).2);
+                assert_eq!(bits(a.as_flattened()), bits(b.as_flattened()), "f {f}");
+            }
+            for (x, y) in [(0, 0), (202, 130), (201, 129), (64, 65), (100, 7)] {
+                let k = 3 * (y * w + x);
+                assert_eq!(
+                    bits(&fixed.pixel(&img.data, w, x, y)),
+                    bits(&copy.data[k..k + 3])
+                );
+            }
+            let lazy = test_signal(w, h, img.data.clone(), fixed);
+            let copied = test_signal(w, h, copy.data.clone(), Fixed::None);
+            let u = [0.9f32, -0.2, 0.35];
+            let (pl, pc) = (lazy.projected(u), copied.projected(u));
+            for (x, y) in [
+                (0.0, 0.0),
+                (63.5, 64.2),
+                (64.0, 127.9),
+                (201.9, 129.9),
+                (150.3, 2.7),
+            ] {
+                assert_eq!(
+                    lazy.sample_u(x, y, u).map(f32::to_bits),
+                    copied.sample_u(x, y, u).map(f32::to_bits)
+                );
+                assert_eq!(
+                    pl.sample(x, y).map(f32::to_bits),
+                    pc.sample(x, y).map(f32::to_bits)
+                );
+            }
+        }
     }
 
     /// Block means against the plain definition (and, to the bit, against the plain loop), on

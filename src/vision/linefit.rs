@@ -253,8 +253,8 @@ pub fn block_samples(
             if b >= n_blocks || excl.contains(x as f64, y as f64) {
                 continue;
             }
-            let k = 3 * (y * sig.w + x);
-            let z = proj[0] * sig.rgb[k] + proj[1] * sig.rgb[k + 1] + proj[2] * sig.rgb[k + 2];
+            let c = sig.fixed.pixel(&sig.rgb, sig.w, x, y);
+            let z = proj[0] * c[0] + proj[1] * c[1] + proj[2] * c[2];
             let c = &mut acc[b * n_bins + ((n + half) as usize).min(n_bins - 1)];
             c[0] += z as f64;
             c[1] += s;

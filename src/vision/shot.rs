@@ -3079,6 +3079,7 @@ mod tests {
             w: cw * f,
             h: ch * f,
             rgb: vec![0.0; 3].into(),
+            fixed: background::Fixed::None,
             f,
             cw,
             ch,
