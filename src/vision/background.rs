@@ -69,6 +69,9 @@ pub struct Signal<'a> {
     /// by the photo's [`Signal::recoloured`] signals (and clones), which read the same pixels:
     /// `rgb` is not to be changed once the signal is built.
     pub planes: PlaneCache,
+    /// The plane of this signal's own projector `proj`, once [`Signal::sample`] has read it
+    /// (taken from `planes`, so shared with every other reader of that projector).
+    pub own: OnceLock<Arc<Tiles>>,
 }
 
 /// The pixel `(x0, y0)` whose cell holds `(x, y)` in a `w × h` image, and the fractions across
@@ -177,10 +180,7 @@ pub struct Tiles {
 /// on first read, so only the pixels near the streaks are ever projected.
 #[derive(Debug, Clone)]
 pub struct Projected<'s> {
-    w: usize,
-    h: usize,
-    rgb: &'s [f32],
-    fixed: Fixed<'s>,
+    src: Source<'s>,
     tiles: Arc<Tiles>,
 }
 
@@ -188,9 +188,26 @@ impl Projected<'_> {
     /// Bilinear sample at `(x, y)`; `None` outside (as [`Signal::sample_u`]).
     #[inline]
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
+        self.src.sample_in(&self.tiles, x, y)
+    }
+}
+
+/// The pixels a plane's tiles are formed from.
+#[derive(Debug, Clone, Copy)]
+struct Source<'s> {
+    w: usize,
+    h: usize,
+    rgb: &'s [f32],
+    fixed: Fixed<'s>,
+}
+
+impl Source<'_> {
+    /// Bilinear sample at `(x, y)` of the plane whose tiles are `tiles`.
+    #[inline]
+    fn sample_in(&self, tiles: &Tiles, x: f64, y: f64) -> Option<f32> {
         let (x0, y0, fx, fy) = bilinear_cell(x, y, self.w, self.h)?;
         let (tx, ty) = (x0 / TILE, y0 / TILE);
-        let z = self.tiles.tiles[ty * self.tiles.tw + tx].get_or_init(|| self.tile(tx, ty));
+        let z = tiles.tiles[ty * tiles.tw + tx].get_or_init(|| self.tile(tiles.u, tx, ty));
         let i = (y0 - ty * TILE) * (TILE + 1) + (x0 - tx * TILE);
         let a = z[i] + fx * (z[i + 1] - z[i]);
         let b = z[i + TILE + 1] + fx * (z[i + TILE + 2] - z[i + TILE + 1]);
@@ -200,8 +217,7 @@ impl Projected<'_> {
     /// Tile `(tx, ty)`: rows and columns `TILE·t ..= TILE·(t + 1)`, clamped to the photo (a
     /// clamped cell is never read: samples need `x0 + 1 < w`).
     #[cold]
-    fn tile(&self, tx: usize, ty: usize) -> Box<[f32]> {
-        let u = self.tiles.u;
+    fn tile(&self, u: [f32; 3], tx: usize, ty: usize) -> Box<[f32]> {
         let mut z = vec![0.0f32; (TILE + 1) * (TILE + 1)];
         let mut buf = Vec::with_capacity(3 * (TILE + 1));
         for (j, row) in z.chunks_exact_mut(TILE + 1).enumerate() {
@@ -220,9 +236,24 @@ impl Projected<'_> {
 
 impl Signal<'_> {
     /// Bilinear sample of the full-resolution signal of the mean ball colour; `None` outside.
+    /// Read from its projected plane ([`Signal::projected`]): the same value to the bit as
+    /// [`Signal::sample_u`] with `proj`, at a third of the reads once a tile is formed (the
+    /// disc's rays and rims sample the same few tiles thousands of times).
     #[inline]
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
-        self.sample_u(x, y, self.proj)
+        let tiles = self.own.get_or_init(|| self.projected(self.proj).tiles);
+        self.source().sample_in(tiles, x, y)
+    }
+
+    /// The pixels, for the projected planes.
+    #[inline]
+    fn source(&self) -> Source<'_> {
+        Source {
+            w: self.w,
+            h: self.h,
+            rgb: &self.rgb,
+            fixed: self.fixed,
+        }
     }
 
     /// The projection vector `w = Σ⁻¹u / (uᵀΣ⁻¹u)` of colour direction `u` (module doc): the
@@ -268,10 +299,7 @@ impl Signal<'_> {
             }
         };
         Projected {
-            w: self.w,
-            h: self.h,
-            rgb: &self.rgb,
-            fixed: self.fixed,
+            src: self.source(),
             tiles,
         }
     }
@@ -327,6 +355,7 @@ impl Signal<'_> {
             cloth_brightness: std::borrow::Cow::Borrowed(&self.cloth_brightness),
             cloth: self.cloth,
             planes: self.planes.clone(),
+            own: OnceLock::new(),
         }
     }
 }
@@ -912,6 +941,7 @@ pub fn build<'a>(
         cloth_brightness: cloth_brightness.into(),
         cloth: model,
         planes: PlaneCache::default(),
+        own: OnceLock::new(),
     })
 }
 
@@ -974,6 +1004,7 @@ mod tests {
             cloth_brightness: vec![1.0].into(),
             cloth: super::ClothModel::Surface,
             planes: super::PlaneCache::default(),
+            own: std::sync::OnceLock::new(),
         }
     }
 
@@ -996,6 +1027,12 @@ mod tests {
             for &y in &ys {
                 let (a, b) = (sig.sample_u(x, y, u), plane.sample(x, y));
                 assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "({x}, {y})");
+                // `sample` reads the plane of the signal's own projector.
+                assert_eq!(
+                    sig.sample(x, y).map(f32::to_bits),
+                    sig.sample_u(x, y, sig.proj).map(f32::to_bits),
+                    "({x}, {y})"
+                );
                 inside += a.is_some() as usize;
             }
         }
@@ -1004,7 +1041,11 @@ mod tests {
         let recoloured = sig.recoloured([0.2, 0.5, 0.3]);
         let again = recoloured.projected(u);
         assert_eq!(again.sample(100.3, 70.6), plane.sample(100.3, 70.6));
-        assert_eq!(sig.planes.0.lock().unwrap().len(), 1);
+        // Two planes: `u`'s, and `sig.proj`'s, which `sample` formed once and then holds.
+        assert_eq!(sig.planes.0.lock().unwrap().len(), 2);
+        let own = sig.own.get().expect("sample formed its plane");
+        assert!(Arc::ptr_eq(own, &sig.projected(sig.proj).tiles));
+        assert_eq!(sig.planes.0.lock().unwrap().len(), 2);
     }
 
     /// The cloth's fixed part taken off where pixels are read gives, to the bit, what a

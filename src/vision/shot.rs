@@ -3094,6 +3094,7 @@ mod tests {
             cloth_brightness: vec![1.0; cw * ch].into(),
             cloth: ClothModel::Surface,
             planes: background::PlaneCache::default(),
+            own: std::sync::OnceLock::new(),
         };
         let samples: Vec<Sample> = (12..68)
             .map(|i| Sample {
