@@ -20,7 +20,7 @@
 
 use super::image_io::RgbImage;
 use super::texture::{BLOCK as TEXTURE_BLOCK, ClothTexture};
-use nalgebra::{DVector, SMatrix, SVector};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// Downsampled target size (longest side) for the coarse search.
@@ -693,11 +693,28 @@ pub(crate) fn fit_cloth_poly(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> [DVec
             }
         }
         gram.fill_lower_triangle_with_upper_triangle();
-        let Some(chol) = gram.cholesky() else {
-            break;
-        };
-        for c in 0..3 {
-            coef[c] = DVector::from_column_slice(chol.solve(&rhs[c]).as_slice());
+        match gram.cholesky() {
+            Some(chol) => {
+                for c in 0..3 {
+                    coef[c] = DVector::from_column_slice(chol.solve(&rhs[c]).as_slice());
+                }
+            }
+            // A degenerate grid (a strip one block high: every power of `y` the same) has no
+            // unique surface; the SVD's least-norm one is still a fit of the cloth.
+            None => {
+                let kept: Vec<usize> = (0..pts.len()).filter(|&i| inlier[i]).collect();
+                let a = DMatrix::from_fn(kept.len(), POLY_TERMS, |r, j| rows[kept[r]][j]);
+                let svd = a.svd(true, true);
+                for c in 0..3 {
+                    let b = DVector::from_iterator(
+                        kept.len(),
+                        kept.iter().map(|&i| pts[i].2[c] as f64),
+                    );
+                    if let Ok(x) = svd.solve(&b, 1e-10) {
+                        coef[c] = x;
+                    }
+                }
+            }
         }
         // One-sided clipping on the summed residual: balls add light, texture is symmetric.
         let res: Vec<f32> = rows
@@ -1204,6 +1221,30 @@ mod tests {
             for x in 300..340 {
                 coarse[y * cw + x][0] += 0.3;
             }
+        }
+        // A strip one block high: the normal equations are singular (every power of `y` is
+        // the same), and the least-norm fit still follows the cloth along the blocks' row
+        // (`yn` = -0.2 for 10 rows in one block of 8).
+        let (sw, sh) = (600, 10);
+        let cloth = |xn: f64| 0.3 + 0.1 * xn;
+        let strip: Vec<[f32; 3]> = (0..sw * sh)
+            .map(|i| {
+                let xn = 2.0 * ((i % sw) as f64 + 0.5) / sw as f64 - 1.0;
+                [cloth(xn) as f32, 0.2, 0.1]
+            })
+            .collect();
+        let coef = super::fit_cloth_poly(sw, sh, &strip);
+        for xn in [-0.95, 0.0, 0.95] {
+            let mut t = [0.0; super::POLY_TERMS];
+            super::poly_terms_into(xn, -0.2, &mut t);
+            let at = |c: usize| {
+                t.iter()
+                    .zip(coef[c].iter())
+                    .map(|(t, a)| t * a)
+                    .sum::<f64>()
+            };
+            assert!((at(0) - cloth(xn)).abs() < 1e-3, "strip at {xn}: {}", at(0));
+            assert!((at(1) - 0.2).abs() < 1e-4, "strip at {xn}: {}", at(1));
         }
         let fitted = super::fit_cloth_surface(cw, ch, &coarse);
         for (x, y) in [(5, 5), (590, 395), (20, 380), (450, 60)] {
