@@ -705,13 +705,13 @@ pub(crate) fn fit_cloth_poly(cw: usize, ch: usize, coarse: &[[f32; 3]]) -> [DVec
                 let kept: Vec<usize> = (0..pts.len()).filter(|&i| inlier[i]).collect();
                 let a = DMatrix::from_fn(kept.len(), POLY_TERMS, |r, j| rows[kept[r]][j]);
                 let svd = a.svd(true, true);
-                for c in 0..3 {
+                for (c, k) in coef.iter_mut().enumerate() {
                     let b = DVector::from_iterator(
                         kept.len(),
                         kept.iter().map(|&i| pts[i].2[c] as f64),
                     );
                     if let Ok(x) = svd.solve(&b, 1e-10) {
-                        coef[c] = x;
+                        *k = x;
                     }
                 }
             }
