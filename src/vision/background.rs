@@ -19,7 +19,7 @@
 //! nothing, as it should: its light then differs from the cloth only as a blotch does.
 
 use super::image_io::RgbImage;
-use super::texture::{BLOCK as TEXTURE_BLOCK, ClothTexture};
+use super::texture::ClothTexture;
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -147,7 +147,7 @@ impl Fixed<'_> {
                     .zip(out.chunks_exact_mut(3))
                     .zip(src.chunks_exact(3))
                 {
-                    let tv = trow[(x / TEXTURE_BLOCK).min(trow.len() - 1)];
+                    let tv = trow[t.column(x)];
                     o[0] = v[0] - tv[0];
                     o[1] = v[1] - tv[1];
                     o[2] = v[2] - tv[2];
@@ -175,9 +175,10 @@ pub struct Tiles {
 }
 
 /// The full-resolution signal of one colour projector (a [`Signal::projected`]), sampled
-/// bilinearly. Holds exactly the values [`Signal::sample_u`] forms at each pixel (the same
-/// products summed in the same order), so sampling it is bit-identical; its tiles are computed
-/// on first read, so only the pixels near the streaks are ever projected.
+/// bilinearly. Holds at each pixel exactly `u · (pixel − fixed part)` ([`Fixed::pixel`], the
+/// same products summed in the same order), so sampling it is bit-identical to projecting the
+/// four pixels of each sample; its tiles are computed on first read, so only the pixels near
+/// the streaks are ever projected.
 #[derive(Debug, Clone)]
 pub struct Projected<'s> {
     src: Source<'s>,
@@ -185,7 +186,7 @@ pub struct Projected<'s> {
 }
 
 impl Projected<'_> {
-    /// Bilinear sample at `(x, y)`; `None` outside (as [`Signal::sample_u`]).
+    /// Bilinear sample at `(x, y)`; `None` where a sample would need a pixel outside.
     #[inline]
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
         self.src.sample_in(&self.tiles, x, y)
@@ -237,7 +238,7 @@ impl Source<'_> {
 impl Signal<'_> {
     /// Bilinear sample of the full-resolution signal of the mean ball colour; `None` outside.
     /// Read from its projected plane ([`Signal::projected`]): the same value to the bit as
-    /// [`Signal::sample_u`] with `proj`, at a third of the reads once a tile is formed (the
+    /// projecting the four pixels on `proj`, at a third of the reads once a tile is formed (the
     /// disc's rays and rims sample the same few tiles thousands of times).
     #[inline]
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
@@ -262,10 +263,10 @@ impl Signal<'_> {
         projector(&self.cov_inv, u)
     }
 
-    /// Bilinear sample of the full-resolution RGB projected on vector `u` (a
-    /// [`Signal::projector`], or any fixed weighting of the channels).
-    #[inline]
-    pub fn sample_u(&self, x: f64, y: f64, u: [f32; 3]) -> Option<f32> {
+    /// Bilinear sample of the full-resolution RGB projected on vector `u`, each of the four
+    /// pixels projected in turn: the definition the projected planes are tested against.
+    #[cfg(test)]
+    fn sample_u(&self, x: f64, y: f64, u: [f32; 3]) -> Option<f32> {
         let (x0, y0, fx, fy) = bilinear_cell(x, y, self.w, self.h)?;
         let v = |x: usize, y: usize| {
             let c = self.fixed.pixel(&self.rgb, self.w, x, y);
@@ -855,10 +856,10 @@ pub fn build<'a>(
     }
     let f = img.w.max(img.h).div_ceil(coarse_side.max(16)).max(1);
     let (cw, ch, c_img) = block_mean(img, f);
-    // `plain`: the residual from the photo's own surface, whose colour covariance is also used
-    // with a texture (see below).
-    // `diff` and its channels' spread; `plain` (with its spread) where a texture is used.
-    let plain_of = |c_img: &[[f32; 3]]| {
+    // `diff`, the residual the signal is built on, with its channels' spread; with a texture,
+    // also `plain`, the residual of the photo without it, whose colour covariance is used (see
+    // below). Each is a block-mean image minus its own fitted surface.
+    let surface_residual = |c_img: &[[f32; 3]]| {
         let d = residual_of(c_img, &fit_cloth_surface(cw, ch, c_img));
         let s = ChannelSpread::of(&d);
         (d, s)
@@ -869,11 +870,16 @@ pub fn build<'a>(
             let s = ChannelSpread::of(&d);
             ((d, s), None, Fixed::Plate(&p.data), ClothModel::Plate)
         }
-        Cloth::Surface => (plain_of(&c_img), None, Fixed::None, ClothModel::Surface),
+        Cloth::Surface => (
+            surface_residual(&c_img),
+            None,
+            Fixed::None,
+            ClothModel::Surface,
+        ),
         Cloth::Texture(t) => {
-            let plain = plain_of(&c_img);
+            let plain = surface_residual(&c_img);
             if t.fits(img) {
-                let with = plain_of(&block_mean_fixed(img, Fixed::Texture(t), f).2);
+                let with = surface_residual(&block_mean_fixed(img, Fixed::Texture(t), f).2);
                 if with.1.scatter() < plain.1.scatter() {
                     (with, Some(plain), Fixed::Texture(t), ClothModel::Texture)
                 } else {

@@ -220,7 +220,14 @@ impl ClothTexture {
     /// last row and column of cells extend to the photo's edge).
     #[inline]
     pub fn at(&self, x: usize, y: usize) -> [f32; 3] {
-        self.row(y)[(x / BLOCK).min(self.tw - 1)]
+        self.row(y)[self.column(x)]
+    }
+
+    /// The index, within a [`ClothTexture::row`], of the cell that covers full-resolution
+    /// column `x`.
+    #[inline]
+    pub fn column(&self, x: usize) -> usize {
+        (x / BLOCK).min(self.tw - 1)
     }
 
     /// The row of cells that covers full-resolution row `y`.
