@@ -696,9 +696,11 @@ impl Pixels {
             for a in 0..NVAR {
                 atb[a] += row[a] * v;
                 let ra = row[a];
-                let acc_a = &mut acc[a];
-                for b in a..NLIN {
-                    acc_a[b] += ra * row[b];
+                // The whole row, a loop of fixed length that vectorises: the entries left of
+                // the diagonal are never read (the lower triangle is filled from the upper one
+                // below), and each entry read gets the same products in the same order.
+                for (acc_ab, rb) in acc[a].iter_mut().zip(&row) {
+                    *acc_ab += ra * rb;
                 }
             }
         }
@@ -711,14 +713,22 @@ impl Pixels {
         }
         let rhs = DVector::from_iterator(NLIN, (0..NLIN).map(|a| atb[a] / scale[a]));
         let sol = m.cholesky()?.solve(&rhs);
-        let coef = DVector::from_iterator(NLIN, (0..NLIN).map(|a| sol[a] / scale[a]));
-        let res = (0..self.q.len())
-            .map(|i| {
-                let row = row_of(&var[i], &mask.fixed[i]);
-                mask.v[i] - (0..NLIN).map(|a| coef[a] * row[a]).sum::<f64>()
+        let c: [f64; NLIN] = std::array::from_fn(|a| sol[a] / scale[a]);
+        let res = var
+            .iter()
+            .zip(&mask.fixed[..])
+            .zip(&mask.v[..])
+            .map(|((vc, fixed), v)| {
+                let row = row_of(vc, fixed);
+                // Summed in column order from -0.0, as `Iterator::sum` does.
+                let mut s = -0.0;
+                for (ca, ra) in c.iter().zip(&row) {
+                    s += ca * ra;
+                }
+                v - s
             })
             .collect();
-        Some((coef, res))
+        Some((DVector::from_row_slice(&c), res))
     }
 }
 
