@@ -286,6 +286,154 @@ impl Prepared {
     }
 }
 
+/// Gradients of one piece's dwell (see [`Prepared::gradients`]), image `(x, y)` components.
+#[derive(Debug, Default, Clone, Copy, PartialEq)]
+struct PieceGrad {
+    /// `∂D₀/∂a`, `∂D₀/∂b`, `∂D₂/∂a`, `∂D₂/∂b` with the piece's time `dens · len` held (an arc
+    /// piece: its time is set by `L₁`, not by its length).
+    d0a: [f64; 2],
+    d0b: [f64; 2],
+    d2a: [f64; 2],
+    d2b: [f64; 2],
+    /// `∂D₀`, `∂D₂`, `∂D₁` (the ramp) for the whole piece moved, `dens` and `len` held (the
+    /// rolling line, which moves with `P₁`).
+    d0m: [f64; 2],
+    d2m: [f64; 2],
+    rampm: [f64; 2],
+}
+
+/// `∫ (G'(d)/d) (t, -y) dt` (`m0`) and `∫ t (G'(d)/d) (t, -y) dt` (`m1`) over the parts of a
+/// piece, along and across it, for `G = K` (`[0]`) and `G = K d²` (`[1]`): the pieces of the
+/// gradient `∇ₚG = G'(d) (p - q)/d`, `p - q = t d̂ - y n̂`. `K' = -1/w` on the ramp and 0
+/// elsewhere; `(K d²)'/d = 2K + K' d`, which is 2 inside and `(2 R₊ - 3d)/w` on the ramp.
+#[derive(Debug, Default, Clone, Copy)]
+struct Moments {
+    m0: [[f64; 2]; 2],
+    m1: [[f64; 2]; 2],
+}
+
+/// `asinh(v/|y|) - asinh(u/|y|)` for `u ≤ v` of one sign, not both 0 when `y = 0` (see
+/// [`y2_asinh_diff`]).
+#[inline]
+fn asinh_diff(u: f64, v: f64, du: f64, dv: f64) -> f64 {
+    if u >= 0.0 {
+        ((v + dv) / (u + du)).ln()
+    } else {
+        ((-u + du) / (-v + dv)).ln()
+    }
+}
+
+impl Moments {
+    /// `K = 1` on `[u, v]`: only `G = K d²` changes there.
+    #[inline]
+    fn inner(&mut self, u: f64, v: f64, y: f64) {
+        if v <= u {
+            return;
+        }
+        let (s1, s2, s3) = (v - u, v * v - u * u, v.powi(3) - u.powi(3));
+        self.m0[1][0] += s2;
+        self.m0[1][1] -= 2.0 * y * s1;
+        self.m1[1][0] += 2.0 * s3 / 3.0;
+        self.m1[1][1] -= y * s2;
+    }
+
+    /// The ramp on `[u, v]`, `u < v` of one sign.
+    #[inline]
+    fn ramp(&mut self, u: f64, v: f64, y: f64, k: &Kernel) {
+        if v <= u {
+            return;
+        }
+        let y2 = y * y;
+        let (du, dv) = ((u * u + y2).sqrt(), (v * v + y2).sqrt());
+        let da = if y2 > 0.0 || u * v > 0.0 {
+            asinh_diff(u, v, du, dv)
+        } else {
+            0.0
+        };
+        let (ya, y2a) = (y * da, y2 * da);
+        // ∫ t/d = d, ∫ 1/d = asinh(t/|y|), ∫ t²/d = (t d - y² asinh)/2,
+        // ∫ d = (t d + y² asinh)/2, ∫ t d = d³/3, ∫ t² d = t (2t² + y²) d/8 - y⁴ asinh/8.
+        let i_t_d = dv - du;
+        let i_tt_d = 0.5 * (v * dv - u * du - y2a);
+        let i_d = 0.5 * (v * dv - u * du + y2a);
+        let i_td = (dv.powi(3) - du.powi(3)) / 3.0;
+        let i_ttd = (v * (2.0 * v * v + y2) * dv - u * (2.0 * u * u + y2) * du) / 8.0 - y2 * y2a / 8.0;
+        let (s1, s2, s3) = (v - u, v * v - u * u, v.powi(3) - u.powi(3));
+        let (w, a) = (k.inv_w, k.rmax);
+        // G = K: G'/d = -1/(w d).
+        self.m0[0][0] -= w * i_t_d;
+        self.m0[0][1] += w * ya;
+        self.m1[0][0] -= w * i_tt_d;
+        self.m1[0][1] += w * y * i_t_d;
+        // G = K d²: (2 R₊ - 3d)/w.
+        self.m0[1][0] += w * (a * s2 - 3.0 * i_td);
+        self.m0[1][1] -= w * y * (2.0 * a * s1 - 3.0 * i_d);
+        self.m1[1][0] += w * (2.0 * a * s3 / 3.0 - 3.0 * i_ttd);
+        self.m1[1][1] -= w * y * (a * s2 - 3.0 * i_td);
+    }
+}
+
+impl Prepared {
+    /// The gradients of the dwell of pixel `q` (see [`PieceGrad`]), from the [`Moments`] of the
+    /// parts [`Prepared::dwell`] integrates: with `σ = (t - t₀)/len` along the piece and the
+    /// piece's time held, `∂I/∂b = dens ∫ σ ∇ₚG dt` and `∂I/∂a = dens ∫ (1 - σ) ∇ₚG dt`; moved
+    /// whole, `dens ∫ ∇ₚG dt`, and for the ramp `D₁ = dens ∫ K (t + x)/R dt` the same with the
+    /// weight `(t + x)/R`.
+    fn gradients(&self, q: (f64, f64), k: &Kernel) -> PieceGrad {
+        let len = self.len;
+        if len <= 0.0 {
+            return PieceGrad::default();
+        }
+        let d = self.d;
+        let (wx, wy) = (q.0 - self.a.0, q.1 - self.a.1);
+        let x = wx * d.0 + wy * d.1;
+        let y = d.0 * wy - d.1 * wx;
+        let rmax = k.rmax;
+        if y.abs() >= rmax || x < -rmax || x > len + rmax {
+            return PieceGrad::default();
+        }
+        let y2 = y * y;
+        let (t0, t1) = (-x, len - x);
+        let mut m = Moments::default();
+        let ha = (k.rmax2 - y2).sqrt();
+        if y2 < k.rmin2 {
+            let hb = (k.rmin2 - y2).sqrt();
+            m.inner(t0.max(-hb), t1.min(hb), y);
+            m.ramp(t0.max(-ha), t1.min(-hb), y, k);
+            m.ramp(t0.max(hb), t1.min(ha), y, k);
+        } else {
+            m.ramp(t0.max(-ha), t1.min(0.0), y, k);
+            m.ramp(t0.max(0.0), t1.min(ha), y, k);
+        }
+        let image = |v: [f64; 2]| [v[0] * d.0 - v[1] * d.1, v[0] * d.1 + v[1] * d.0];
+        let scale = [self.dens, self.dens * k.inv_r2];
+        let ends = |g: usize| {
+            let s = scale[g];
+            let b = [
+                s * (m.m1[g][0] - t0 * m.m0[g][0]) / len,
+                s * (m.m1[g][1] - t0 * m.m0[g][1]) / len,
+            ];
+            let a = [s * m.m0[g][0] - b[0], s * m.m0[g][1] - b[1]];
+            (image(a), image(b))
+        };
+        let ((d0a, d0b), (d2a, d2b)) = (ends(0), ends(1));
+        let moved = |g: usize| image([scale[g] * m.m0[g][0], scale[g] * m.m0[g][1]]);
+        let sr = self.dens * k.inv_r;
+        PieceGrad {
+            d0a,
+            d0b,
+            d2a,
+            d2b,
+            d0m: moved(0),
+            d2m: moved(1),
+            rampm: image([
+                sr * (m.m1[0][0] + x * m.m0[0][0]),
+                sr * (m.m1[0][1] + x * m.m0[0][1]),
+            ]),
+        }
+    }
+}
+
 /// `∫ K dt`, `∫ K d² dt` and `∫ K t dt` over the parts of a piece, `d = √(t² + y²)`.
 #[derive(Debug, Default, Clone, Copy)]
 struct Integrals {
@@ -390,6 +538,11 @@ fn legs(x: &[f64; 3]) -> (f64, f64) {
 
 /// The outgoing path's pieces `(a, b, density)` for `(δ, L₀, L₁)`, rolling speed 1.
 fn outgoing_pieces(g: &ArcGeometry, x: &[f64; 3]) -> Vec<Piece> {
+    outgoing_pieces_at(g, x).0
+}
+
+/// [`outgoing_pieces`], with the Bézier parameters `(τ_a, τ_b)` of each arc piece's ends.
+fn outgoing_pieces_at(g: &ArcGeometry, x: &[f64; 3]) -> (Vec<Piece>, Vec<(f64, f64)>) {
     let (delta, (l0, l1)) = (x[0], legs(x));
     let (u0, u1) = (unit(delta), unit(g.theta));
     let s = g.p;
@@ -402,12 +555,14 @@ fn outgoing_pieces(g: &ArcGeometry, x: &[f64; 3]) -> Vec<Piece> {
     // Time per unit τ is 2 L₁ (end speed 2L₁/T = 1).
     let dt = 2.0 * l1 / N_ARC as f64;
     let mut out = Vec::with_capacity(N_ARC + 1);
+    let mut taus = Vec::with_capacity(N_ARC);
     let mut prev = s;
     for i in 1..=N_ARC {
         let q = bez(i as f64 / N_ARC as f64);
         let len = (q.0 - prev.0).hypot(q.1 - prev.1);
         if len > 1e-9 {
             out.push((prev, q, dt / len));
+            taus.push(((i - 1) as f64 / N_ARC as f64, i as f64 / N_ARC as f64));
         }
         prev = q;
     }
@@ -416,7 +571,29 @@ fn outgoing_pieces(g: &ArcGeometry, x: &[f64; 3]) -> Vec<Piece> {
         e.1 + LINE_EXTRA_R * g.r * u1.1,
     );
     out.push((e, end, 1.0));
-    out
+    (out, taus)
+}
+
+/// `∂B(τ)/∂x` of the arc's point at `τ` for the parameters `x = (δ, L₀, L₁)` (legs `|x| + ½`,
+/// [`legs`]): `B = (1-τ)² P + 2τ(1-τ) C + τ² P₁`, `C = P + L₀ u(δ)`, `P₁ = C + L₁ u(θ)`.
+fn bezier_derivatives(g: &ArcGeometry, x: &[f64; 3], tau: f64) -> [[f64; 2]; 3] {
+    let (l0, _) = legs(x);
+    let (c, s) = (x[0].cos(), x[0].sin());
+    let (ct, st) = (g.theta.cos(), g.theta.sin());
+    let wc = tau * (2.0 - tau);
+    let w1 = tau * tau;
+    let (s1, s2) = (sign(x[1]), sign(x[2]));
+    [
+        [-wc * l0 * s, wc * l0 * c],
+        [wc * c * s1, wc * s * s1],
+        [w1 * ct * s2, w1 * st * s2],
+    ]
+}
+
+/// The derivative of `|v|` as the finite differences see it (a step up from 0 lengthens).
+#[inline]
+fn sign(v: f64) -> f64 {
+    if v < 0.0 { -1.0 } else { 1.0 }
 }
 
 /// Grid positions `k < n` (at `o + k st`) within `[v0, v1]`: `ceil((v0 - o)/st) ..=
@@ -668,6 +845,64 @@ impl Pixels {
         out
     }
 
+    /// [`Pixels::outgoing`] (the same values to the bit) and each cell's derivatives of its
+    /// outgoing dwell with respect to `x = (δ, L₀, L₁)`: every piece's end gradients
+    /// ([`Prepared::gradients`]) through the Bézier's ([`bezier_derivatives`]); an arc piece's
+    /// time `2L₁/N` adds `D/L₁` to `∂/∂L₁`; the rolling line moves with `P₁ = B(1)`.
+    fn outgoing_grad(&self, g: &ArcGeometry, x: &[f64; 3]) -> (Vec<Dwell>, Vec<[Dwell; 3]>) {
+        self.evals.set(self.evals.get() + 1);
+        let (pieces, taus) = outgoing_pieces_at(g, x);
+        let prepared: Vec<Prepared> = pieces
+            .iter()
+            .map(|&(a, b, d)| Prepared::new(a, b, d))
+            .collect();
+        let (arc, line) = prepared.split_at(prepared.len() - 1);
+        let reach = self.kernel.rmax + 1.0;
+        let l1 = legs(x).1;
+        let s2 = sign(x[2]);
+        let mut out = vec![Dwell::default(); self.q.len()];
+        let mut dout = vec![[Dwell::default(); 3]; self.q.len()];
+        let dot = |v: [f64; 2], w: [f64; 2]| v[0] * w[0] + v[1] * w[1];
+        for ((piece, &(a, b, _)), &(ta, tb)) in arc.iter().zip(&pieces).zip(&taus) {
+            let (da, db) = (bezier_derivatives(g, x, ta), bezier_derivatives(g, x, tb));
+            let lo = (a.0.min(b.0) - reach, a.1.min(b.1) - reach);
+            let hi = (a.0.max(b.0) + reach, a.1.max(b.1) + reach);
+            self.each_cell_in(lo, hi, |i| {
+                let f = piece.dwell(self.q[i], &self.kernel);
+                out[i].d0 += f.d0;
+                out[i].d2 += f.d2;
+                if f.d0 == 0.0 && f.d2 == 0.0 {
+                    return;
+                }
+                let gr = piece.gradients(self.q[i], &self.kernel);
+                for j in 0..3 {
+                    let o = &mut dout[i][j];
+                    o.d0 += dot(gr.d0a, da[j]) + dot(gr.d0b, db[j]);
+                    o.d2 += dot(gr.d2a, da[j]) + dot(gr.d2b, db[j]);
+                }
+                dout[i][2].d0 += f.d0 * s2 / l1;
+                dout[i][2].d2 += f.d2 * s2 / l1;
+            });
+        }
+        let de = bezier_derivatives(g, x, 1.0);
+        for ((o, d), &q) in out.iter_mut().zip(dout.iter_mut()).zip(&self.q) {
+            let f = line[0].dwell(q, &self.kernel);
+            o.d0 += f.d0;
+            o.d2 += f.d2;
+            o.ramp = f.ramp;
+            if f.d0 == 0.0 && f.d2 == 0.0 && f.ramp == 0.0 {
+                continue;
+            }
+            let gr = line[0].gradients(q, &self.kernel);
+            for j in 0..3 {
+                d[j].d0 += dot(gr.d0m, de[j]);
+                d[j].d2 += dot(gr.d2m, de[j]);
+                d[j].ramp = dot(gr.rampm, de[j]);
+            }
+        }
+        (out, dout)
+    }
+
     /// Projected cost and residuals at the nonlinear parameters `x` (amplitudes eliminated).
     fn evaluate(&self, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option<(f64, Vec<f64>)> {
         let out = self.outgoing(g, x);
@@ -678,6 +913,12 @@ impl Pixels {
     /// Linear least squares of the amplitudes given the outgoing columns; returns the
     /// amplitudes and the residuals (only over the mask's pixels).
     fn project(&self, out: &[Dwell], mask: &Mask) -> Option<(DVector<f64>, Vec<f64>)> {
+        self.solve(out, mask)
+            .map(|s| (DVector::from_row_slice(&s.coef), s.res))
+    }
+
+    /// [`Pixels::project`], keeping what the Jacobian needs.
+    fn solve(&self, out: &[Dwell], mask: &Mask) -> Option<Solved> {
         // Accumulated in fixed-size arrays (bounds known at compile time): this loop over every
         // pixel was a third of the analysis when it indexed a `DMatrix`. Only the rows of the
         // outgoing columns change with `x`; the fixed block comes from the mask. Same order of
@@ -712,7 +953,8 @@ impl Pixels {
             m[(a, a)] += 1e-12;
         }
         let rhs = DVector::from_iterator(NLIN, (0..NLIN).map(|a| atb[a] / scale[a]));
-        let sol = m.cholesky()?.solve(&rhs);
+        let chol = m.cholesky()?;
+        let sol = chol.solve(&rhs);
         let c: [f64; NLIN] = std::array::from_fn(|a| sol[a] / scale[a]);
         let res = var
             .iter()
@@ -728,8 +970,86 @@ impl Pixels {
                 v - s
             })
             .collect();
-        Some((DVector::from_row_slice(&c), res))
+        Some(Solved {
+            coef: c,
+            res,
+            var,
+            chol,
+            scale,
+        })
     }
+
+    /// The Jacobian `∂r/∂x` of the projected residuals (amplitudes re-solved, Golub–Pereyra):
+    /// `J = -[(I - A A⁺) ∂A c + (A⁺)ᵀ ∂Aᵀ r]`, the derivative the finite differences of
+    /// [`Pixels::evaluate`] approximate, from the outgoing dwell's derivatives `dout`
+    /// ([`Pixels::outgoing_grad`]); rows of pixels outside the mask are 0, and so is the
+    /// column of `δ` when it is held.
+    fn jacobian(
+        &self,
+        mask: &Mask,
+        s: &Solved,
+        dout: &[[Dwell; 3]],
+        pin_delta: bool,
+    ) -> Vec<[f64; 3]> {
+        let dvar = mask.dvar_columns(self, dout);
+        let c = &s.coef;
+        // ∂A_j c per pixel; Aᵀ(∂A_j c) and ∂A_jᵀ r over the kept pixels.
+        let mut h = [[0.0f64; NLIN]; 3];
+        let mut e = [[0.0f64; NLIN]; 3];
+        let mut g = vec![[0.0f64; 3]; self.q.len()];
+        for i in 0..self.q.len() {
+            if !mask.keep[i] {
+                continue;
+            }
+            let row = row_of(&s.var[i], &mask.fixed[i]);
+            for j in 0..3 {
+                let dv = &dvar[i][j];
+                let gij: f64 = (0..NVAR).map(|a| dv[a] * c[a]).sum();
+                g[i][j] = gij;
+                for (hb, rb) in h[j].iter_mut().zip(&row) {
+                    *hb += rb * gij;
+                }
+                for a in 0..NVAR {
+                    e[j][a] += dv[a] * s.res[i];
+                }
+            }
+        }
+        // (AᵀA)⁻¹ y through the scaled factor: S⁻¹ M⁻¹ S⁻¹ y.
+        let inv = |y: &[f64; NLIN]| -> [f64; NLIN] {
+            let rhs = DVector::from_iterator(NLIN, (0..NLIN).map(|a| y[a] / s.scale[a]));
+            let sol = s.chol.solve(&rhs);
+            std::array::from_fn(|a| sol[a] / s.scale[a])
+        };
+        let wz: [[f64; NLIN]; 3] = std::array::from_fn(|j| {
+            let (w, z) = (inv(&h[j]), inv(&e[j]));
+            std::array::from_fn(|a| w[a] - z[a])
+        });
+        (0..self.q.len())
+            .map(|i| {
+                if !mask.keep[i] {
+                    return [0.0; 3];
+                }
+                let row = row_of(&s.var[i], &mask.fixed[i]);
+                std::array::from_fn(|j| {
+                    if j == 0 && pin_delta {
+                        return 0.0;
+                    }
+                    let aw: f64 = (0..NLIN).map(|a| row[a] * wz[j][a]).sum();
+                    aw - g[i][j]
+                })
+            })
+            .collect()
+    }
+}
+
+/// The amplitudes' solve at one point: coefficients, residuals, the outgoing columns as fitted
+/// and the scaled normal matrix's factor (with its column scale).
+struct Solved {
+    coef: [f64; NLIN],
+    res: Vec<f64>,
+    var: Vec<[f64; NVAR]>,
+    chol: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    scale: Vec<f64>,
 }
 
 /// The pixels a fit uses, with the parts of the normal equations that do not depend on the
@@ -786,6 +1106,29 @@ impl<'a> Mask<'a> {
             v,
             fixed,
             highpass,
+        }
+    }
+
+    /// The derivatives of the outgoing columns as fitted with respect to `x` (the columns are
+    /// linear in the dwell, and so is the high-pass).
+    fn dvar_columns(&self, px: &Pixels, dout: &[[Dwell; 3]]) -> Vec<[[f64; NVAR]; 3]> {
+        let raw = |i: usize| -> [f64; 3 * NVAR] {
+            let mut v = [0.0; 3 * NVAR];
+            for (j, d) in dout[i].iter().enumerate() {
+                v[j * NVAR..(j + 1) * NVAR].copy_from_slice(&var_columns(*d, &px.fixed[i]));
+            }
+            v
+        };
+        let split = |v: [f64; 3 * NVAR]| -> [[f64; NVAR]; 3] {
+            std::array::from_fn(|j| std::array::from_fn(|a| v[j * NVAR + a]))
+        };
+        match &self.highpass {
+            Some(hp) => hp
+                .apply(&px.cell, &self.keep, raw)
+                .into_iter()
+                .map(split)
+                .collect(),
+            None => (0..dout.len()).map(|i| split(raw(i))).collect(),
         }
     }
 
@@ -1648,6 +1991,68 @@ mod tests {
         fit(&sig, sig.u, g).expect("arc fit")
     }
 
+    /// The Jacobian of the projected residuals ([`Pixels::jacobian`]) against central
+    /// differences of [`Pixels::evaluate`], on a rendered arc, at the truth and away from it,
+    /// with a partial mask, with and without the high-pass and with `δ` held.
+    #[test]
+    fn projected_jacobian_is_the_residuals_derivative() {
+        let (delta, theta) = (100f64.to_radians(), 125f64.to_radians());
+        let (frame, g) = scene(delta, theta, 0.55 * R, 0.6 * R);
+        let bd = Backdrop::plain(520, 420, 0.02);
+        let base = bd.base_plate();
+        let img = to_float(&render(&frame, &bd, &base, Some(3)));
+        let plate = to_float(&render(&Frame::default(), &bd, &base, None));
+        let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
+        let px = Pixels::gather(&sig, sig.u, &g, &[[delta, 0.55 * R, 0.6 * R]], 2);
+        let n = px.q.len();
+        let keep: Vec<bool> = (0..n).map(|i| i % 7 != 3).collect();
+        let steps = [2e-5, 1e-3, 1e-3];
+        for highpass in [false, true] {
+            let mask = Mask::new(&px, keep.clone(), highpass);
+            for x in [
+                [delta, 0.55 * R, 0.6 * R],
+                [delta + 0.1, 0.3 * R, 1.1 * R],
+                [delta - 0.2, -0.8 * R, 0.2 * R],
+            ] {
+                let (out, dout) = px.outgoing_grad(&g, &x);
+                let plain = px.outgoing(&g, &x);
+                assert!(out.iter().zip(&plain).all(|(a, b)| a.d0.to_bits() == b.d0.to_bits()
+                    && a.d2.to_bits() == b.d2.to_bits()
+                    && a.ramp.to_bits() == b.ramp.to_bits()));
+                let solved = px.solve(&out, &mask).expect("solve");
+                for pin in [false, true] {
+                    let jac = px.jacobian(&mask, &solved, &dout, pin);
+                    for k in 0..3 {
+                        let (mut xp, mut xm) = (x, x);
+                        xp[k] += steps[k];
+                        xm[k] -= steps[k];
+                        let (_, rp) = px.evaluate(&g, &xp, &mask).unwrap();
+                        let (_, rm) = px.evaluate(&g, &xm, &mask).unwrap();
+                        let (mut num, mut err) = (0.0, 0.0);
+                        for i in 0..n {
+                            let fd = if keep[i] && !(pin && k == 0) {
+                                (rp[i] - rm[i]) / (2.0 * steps[k])
+                            } else {
+                                0.0
+                            };
+                            num += fd * fd;
+                            err += (jac[i][k] - fd).powi(2);
+                        }
+                        let rel = (err / num.max(1e-300)).sqrt();
+                        if pin && k == 0 {
+                            assert!(err == 0.0, "held δ has a column");
+                        } else {
+                            assert!(
+                                num > 0.0 && rel < 1e-4,
+                                "highpass {highpass} x {x:?} column {k}: relative error {rel:e}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn recovers_the_start_tangent_of_a_rendered_arc() {
         // Follow-like arc: turns 25° over about one radius.
@@ -1708,6 +2113,81 @@ mod tests {
     /// Where a piece spans a pixel's whole chord, the dwell computes one of its two
     /// mirror-image ramps and uses it twice: the same bits as integrating both, for pixels
     /// inside and beyond the inner radius of a long piece.
+    /// The closed-form end and move gradients of a piece's dwell against central differences
+    /// of [`Prepared::dwell`], for pixels inside the inner radius, on the ramp, across the piece's
+    /// ends and at the kernel's edge, on short (arc) and long (rolling line) pieces.
+    #[test]
+    fn piece_gradients_are_the_dwells_derivatives() {
+        let k = Kernel::for_cells(40.0, 2);
+        let h = 1e-5;
+        let mut checked = [0usize; 3];
+        for (a, b, dens) in [
+            ((3.1, -2.7), (7.9, 1.3), 0.8),
+            ((-1.3, 0.4), (-0.2, 5.1), 2.5),
+            ((10.3, -7.1), (490.9, 203.2), 1.0),
+        ] {
+            let piece = Prepared::new(a, b, dens);
+            for i in 0..2000 {
+                let q = (
+                    a.0 - 45.0 + 0.0731 * (i % 50) as f64 * 37.0,
+                    a.1 - 45.0 + 0.0917 * (i / 50) as f64 * 27.0,
+                );
+                let f = piece.dwell(q, &k);
+                if f.d0 == 0.0 {
+                    continue;
+                }
+                let gr = piece.gradients(q, &k);
+                // Held time: move one end, scale the density so that `dens · len` stays.
+                let with = |a: (f64, f64), b: (f64, f64)| {
+                    let l = (b.0 - a.0).hypot(b.1 - a.1);
+                    Prepared::new(a, b, dens * piece.len / l).dwell(q, &k)
+                };
+                let moved = |a: (f64, f64), b: (f64, f64)| Prepared::new(a, b, dens).dwell(q, &k);
+                for c in 0..2 {
+                    let e = [(h, 0.0), (0.0, h)][c];
+                    let (ap, am) = ((a.0 + e.0, a.1 + e.1), (a.0 - e.0, a.1 - e.1));
+                    let (bp, bm) = ((b.0 + e.0, b.1 + e.1), (b.0 - e.0, b.1 - e.1));
+                    let fd = |p: Dwell, m: Dwell| {
+                        [
+                            (p.d0 - m.d0) / (2.0 * h),
+                            (p.d2 - m.d2) / (2.0 * h),
+                            (p.ramp - m.ramp) / (2.0 * h),
+                        ]
+                    };
+                    let da = fd(with(ap, b), with(am, b));
+                    let db = fd(with(a, bp), with(a, bm));
+                    let dm = fd(moved(ap, bp), moved(am, bm));
+                    let pairs = [
+                        (gr.d0a[c], da[0]),
+                        (gr.d0b[c], db[0]),
+                        (gr.d2a[c], da[1]),
+                        (gr.d2b[c], db[1]),
+                        (gr.d0m[c], dm[0]),
+                        (gr.d2m[c], dm[1]),
+                        (gr.rampm[c], dm[2]),
+                    ];
+                    for (j, (ours, theirs)) in pairs.into_iter().enumerate() {
+                        // Central differences are good to about 1e-9 of the values here.
+                        let tol = 1e-6 * (1.0 + f.d0.abs() + f.d2.abs() + f.ramp.abs());
+                        assert!(
+                            (ours - theirs).abs() < tol,
+                            "piece {a:?}-{b:?} q {q:?} component {c} gradient {j}: \
+                             {ours} against {theirs}"
+                        );
+                    }
+                }
+                let (wx, wy) = (q.0 - a.0, q.1 - a.1);
+                let y = (piece.d.0 * wy - piece.d.1 * wx).abs();
+                checked[if y * y < k.rmin2 { 0 } else { 1 }] += 1;
+                if f.d0 < piece.dens * piece.len * 0.999 {
+                    checked[2] += 1;
+                }
+            }
+        }
+        // Pixels inside the inner radius, beyond it (ramp only) and partly covered all occur.
+        assert!(checked.iter().all(|&n| n > 50), "{checked:?}");
+    }
+
     #[test]
     fn mirrored_ramps_are_two_ramp_calls_to_the_last_bit() {
         // The dwell as it was before the shortcut: both ramps integrated, always.
