@@ -870,8 +870,25 @@ impl Pixels {
 
     /// Outgoing columns for the nonlinear parameters `x`.
     fn outgoing(&self, g: &ArcGeometry, x: &[f64; 3]) -> Vec<Dwell> {
+        self.outgoing_with::<false>(g, x).0
+    }
+
+    /// [`Pixels::outgoing`] (the same values to the bit) and each cell's derivatives of its
+    /// outgoing dwell with respect to `x = (δ, L₀, L₁)`: every piece's end gradients
+    /// ([`Prepared::gradients`]) through the Bézier's ([`bezier_derivatives`]); an arc piece's
+    /// time `2L₁/N` adds `D/L₁` to `∂/∂L₁`; the rolling line moves with `P₁ = B(1)`.
+    fn outgoing_grad(&self, g: &ArcGeometry, x: &[f64; 3]) -> (Vec<Dwell>, Vec<[Dwell; 3]>) {
+        self.outgoing_with::<true>(g, x)
+    }
+
+    /// The outgoing dwell of every cell, and with `G` its derivatives (else an empty list).
+    fn outgoing_with<const G: bool>(
+        &self,
+        g: &ArcGeometry,
+        x: &[f64; 3],
+    ) -> (Vec<Dwell>, Vec<[Dwell; 3]>) {
         self.evals.set(self.evals.get() + 1);
-        let pieces = outgoing_pieces(g, x);
+        let (pieces, taus) = outgoing_pieces_at(g, x);
         let prepared: Vec<Prepared> = pieces
             .iter()
             .map(|&(a, b, d)| Prepared::new(a, b, d))
@@ -882,46 +899,22 @@ impl Pixels {
         // same to the last bit as visiting every piece from every cell.
         let (arc, line) = prepared.split_at(prepared.len() - 1);
         let reach = self.kernel.rmax + 1.0;
-        let mut out = vec![Dwell::default(); self.q.len()];
-        for (piece, &(a, b, _)) in arc.iter().zip(&pieces) {
-            let lo = (a.0.min(b.0) - reach, a.1.min(b.1) - reach);
-            let hi = (a.0.max(b.0) + reach, a.1.max(b.1) + reach);
-            self.each_cell_in(lo, hi, |i| {
-                let f = piece.dwell(self.q[i], &self.kernel);
-                out[i].d0 += f.d0;
-                out[i].d2 += f.d2;
-            });
-        }
-        // Only the rolling line decelerates at a constant rate (the arc's own speed change is in
-        // its shape): its ramp is the only one.
-        for (o, &q) in out.iter_mut().zip(&self.q) {
-            let f = line[0].dwell(q, &self.kernel);
-            o.d0 += f.d0;
-            o.d2 += f.d2;
-            o.ramp = f.ramp;
-        }
-        out
-    }
-
-    /// [`Pixels::outgoing`] (the same values to the bit) and each cell's derivatives of its
-    /// outgoing dwell with respect to `x = (δ, L₀, L₁)`: every piece's end gradients
-    /// ([`Prepared::gradients`]) through the Bézier's ([`bezier_derivatives`]); an arc piece's
-    /// time `2L₁/N` adds `D/L₁` to `∂/∂L₁`; the rolling line moves with `P₁ = B(1)`.
-    fn outgoing_grad(&self, g: &ArcGeometry, x: &[f64; 3]) -> (Vec<Dwell>, Vec<[Dwell; 3]>) {
-        self.evals.set(self.evals.get() + 1);
-        let (pieces, taus) = outgoing_pieces_at(g, x);
-        let prepared: Vec<Prepared> = pieces
-            .iter()
-            .map(|&(a, b, d)| Prepared::new(a, b, d))
-            .collect();
-        let (arc, line) = prepared.split_at(prepared.len() - 1);
-        let reach = self.kernel.rmax + 1.0;
         let l1 = legs(x).1;
         let s2 = sign(x[2]);
         let mut out = vec![Dwell::default(); self.q.len()];
-        let mut dout = vec![[Dwell::default(); 3]; self.q.len()];
+        let mut dout = vec![[Dwell::default(); 3]; if G { self.q.len() } else { 0 }];
         let dot = |v: [f64; 2], w: [f64; 2]| v[0] * w[0] + v[1] * w[1];
         for ((piece, &(a, b, _)), &(ta, tb)) in arc.iter().zip(&pieces).zip(&taus) {
+            let lo = (a.0.min(b.0) - reach, a.1.min(b.1) - reach);
+            let hi = (a.0.max(b.0) + reach, a.1.max(b.1) + reach);
+            if !G {
+                self.each_cell_in(lo, hi, |i| {
+                    let f = piece.dwell(self.q[i], &self.kernel);
+                    out[i].d0 += f.d0;
+                    out[i].d2 += f.d2;
+                });
+                continue;
+            }
             let (da, db) = (bezier_derivatives(g, x, ta), bezier_derivatives(g, x, tb));
             // A pixel whose inner radius holds the whole piece sees `D₂ = T/R² (|m - q|² +
             // len²/12)` (`T` the piece's time, `m` its middle), so `∂D₂/∂a = T/R² ((m - q) +
@@ -933,8 +926,6 @@ impl Pixels {
                 ((a.0 - b.0) * (da[j][0] - db[j][0]) + (a.1 - b.1) * (da[j][1] - db[j][1])) / 6.0
             });
             let tw = piece.dens * piece.len * self.kernel.inv_r2;
-            let lo = (a.0.min(b.0) - reach, a.1.min(b.1) - reach);
-            let hi = (a.0.max(b.0) + reach, a.1.max(b.1) + reach);
             self.each_cell_in(lo, hi, |i| {
                 let q = self.q[i];
                 let (f, cover, m) = piece.dwell_impl::<true>(q, &self.kernel);
@@ -961,21 +952,26 @@ impl Pixels {
                 o[2].d2 += f.d2 * s2 / l1;
             });
         }
+        // Only the rolling line decelerates at a constant rate (the arc's own speed change is in
+        // its shape): its ramp is the only one.
         let de = bezier_derivatives(g, x, 1.0);
-        for ((o, d), &q) in out.iter_mut().zip(dout.iter_mut()).zip(&self.q) {
-            let (f, cover, m) = line[0].dwell_impl::<true>(q, &self.kernel);
+        for (i, (o, &q)) in out.iter_mut().zip(&self.q).enumerate() {
+            let (f, cover, m) = line[0].dwell_impl::<G>(q, &self.kernel);
             o.d0 += f.d0;
             o.d2 += f.d2;
             o.ramp = f.ramp;
+            if !G {
+                continue;
+            }
             let gr = match cover {
                 Cover::Out => continue,
                 Cover::Part => m.gradients(&line[0], line[0].along(q), &self.kernel),
                 Cover::Inner => line[0].gradients(q, &self.kernel),
             };
-            for j in 0..3 {
-                d[j].d0 += dot(gr.d0m, de[j]);
-                d[j].d2 += dot(gr.d2m, de[j]);
-                d[j].ramp = dot(gr.rampm, de[j]);
+            for (d, e) in dout[i].iter_mut().zip(&de) {
+                d.d0 += dot(gr.d0m, *e);
+                d.d2 += dot(gr.d2m, *e);
+                d.ramp = dot(gr.rampm, *e);
             }
         }
         (out, dout)
@@ -2195,12 +2191,20 @@ mod tests {
     /// The arc fit on a rendering with sensor noise `a = b = noise` (seeded), against a
     /// noise-free plate.
     fn measure(frame: &Frame, g: &ArcGeometry, noise: f64, seed: Option<u64>) -> ArcFit {
-        let bd = Backdrop::plain(520, 420, noise);
-        let base = bd.base_plate();
-        let img = to_float(&render(frame, &bd, &base, seed));
-        let plate = to_float(&render(&Frame::default(), &bd, &base, None));
+        let (img, plate) = rendering(frame, noise, seed);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         fit(&sig, sig.u, g).expect("arc fit")
+    }
+
+    /// A rendering of `frame` on a plain 520×420 cloth with sensor noise `a = b = noise`
+    /// (seeded), and its noise-free plate.
+    fn rendering(frame: &Frame, noise: f64, seed: Option<u64>) -> (FloatImage, FloatImage) {
+        let bd = Backdrop::plain(520, 420, noise);
+        let base = bd.base_plate();
+        (
+            to_float(&render(frame, &bd, &base, seed)),
+            to_float(&render(&Frame::default(), &bd, &base, None)),
+        )
     }
 
     /// The Jacobian of the projected residuals ([`Pixels::jacobian`]) against central
@@ -2210,10 +2214,7 @@ mod tests {
     fn projected_jacobian_is_the_residuals_derivative() {
         let (delta, theta) = (100f64.to_radians(), 125f64.to_radians());
         let (frame, g) = scene(delta, theta, 0.55 * R, 0.6 * R);
-        let bd = Backdrop::plain(520, 420, 0.02);
-        let base = bd.base_plate();
-        let img = to_float(&render(&frame, &bd, &base, Some(3)));
-        let plate = to_float(&render(&Frame::default(), &bd, &base, None));
+        let (img, plate) = rendering(&frame, 0.02, Some(3));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let px = Pixels::gather(&sig, sig.u, &g, &[[delta, 0.55 * R, 0.6 * R]], 2);
         let n = px.q.len();
@@ -2321,10 +2322,7 @@ mod tests {
     fn an_arc_ending_on_the_samples_bound_is_not_read() {
         let (delta, theta) = (100f64.to_radians(), 125f64.to_radians());
         let (frame, g) = scene(delta, theta, 0.55 * R, 0.6 * R);
-        let bd = Backdrop::plain(520, 420, 0.005);
-        let base = bd.base_plate();
-        let img = to_float(&render(&frame, &bd, &base, Some(1)));
-        let plate = to_float(&render(&Frame::default(), &bd, &base, None));
+        let (img, plate) = rendering(&frame, 0.005, Some(1));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let fit_to = |max_end: Option<f64>| fit(&sig, sig.u, &ArcGeometry { max_end, ..g });
         // The true arc ends 0.55 R cos 25° + 0.6 R = 1.10 R along θ.
