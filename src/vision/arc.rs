@@ -2207,6 +2207,53 @@ mod tests {
         )
     }
 
+    /// The closed-form gradients of `piece` at pixel `q` next to central differences of its
+    /// dwell with step `h`, as `(ours, theirs)` for each image component: the seven of
+    /// [`PieceGrad`] in its order.
+    fn gradient_pairs(piece: &Prepared, q: (f64, f64), k: &Kernel, h: f64) -> [[(f64, f64); 7]; 2] {
+        let gr = piece.gradients(q, k);
+        let (a, b, dens) = (
+            piece.a,
+            (
+                piece.a.0 + piece.len * piece.d.0,
+                piece.a.1 + piece.len * piece.d.1,
+            ),
+            piece.dens,
+        );
+        // Held time: move one end, scale the density so that `dens · len` stays.
+        let with = |a: (f64, f64), b: (f64, f64)| {
+            let l = (b.0 - a.0).hypot(b.1 - a.1);
+            Prepared::new(a, b, dens * piece.len / l).dwell(q, k)
+        };
+        let moved = |a: (f64, f64), b: (f64, f64)| Prepared::new(a, b, dens).dwell(q, k);
+        std::array::from_fn(|c| {
+            let e = [(h, 0.0), (0.0, h)][c];
+            let (ap, am) = ((a.0 + e.0, a.1 + e.1), (a.0 - e.0, a.1 - e.1));
+            let (bp, bm) = ((b.0 + e.0, b.1 + e.1), (b.0 - e.0, b.1 - e.1));
+            let fd = |p: Dwell, m: Dwell| {
+                [
+                    (p.d0 - m.d0) / (2.0 * h),
+                    (p.d2 - m.d2) / (2.0 * h),
+                    (p.ramp - m.ramp) / (2.0 * h),
+                ]
+            };
+            let (da, db, dm) = (
+                fd(with(ap, b), with(am, b)),
+                fd(with(a, bp), with(a, bm)),
+                fd(moved(ap, bp), moved(am, bm)),
+            );
+            [
+                (gr.d0a[c], da[0]),
+                (gr.d0b[c], db[0]),
+                (gr.d2a[c], da[1]),
+                (gr.d2b[c], db[1]),
+                (gr.d0m[c], dm[0]),
+                (gr.d2m[c], dm[1]),
+                (gr.rampm[c], dm[2]),
+            ]
+        })
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(4000))]
         /// The closed-form gradients against central differences over random pieces, kernels
@@ -2239,47 +2286,15 @@ mod tests {
             }
             let q = (a.0 + x * d.0 - y * d.1, a.1 + x * d.1 + y * d.0);
             let f = piece.dwell(q, &k);
-            let gr = piece.gradients(q, &k);
-            let h = 1e-6 * r;
-            let with = |a: (f64, f64), b: (f64, f64)| {
-                let l = (b.0 - a.0).hypot(b.1 - a.1);
-                Prepared::new(a, b, dens * piece.len / l).dwell(q, &k)
-            };
-            let moved = |a: (f64, f64), b: (f64, f64)| Prepared::new(a, b, dens).dwell(q, &k);
             // Absolute, in units of the piece's time: the central differences agree to about
             // 1e-9 of the gradients (a 1e-12 bound fails at 7e-12 on a 0.011 gradient), and
             // across the kernel's kinks at its two radii they are good only to `h f''`.
             let tol = 1e-7 * dens * piece.len.max(1.0);
-            for c in 0..2 {
-                let e = [(h, 0.0), (0.0, h)][c];
-                let (ap, am) = ((a.0 + e.0, a.1 + e.1), (a.0 - e.0, a.1 - e.1));
-                let (bp, bm) = ((b.0 + e.0, b.1 + e.1), (b.0 - e.0, b.1 - e.1));
-                let fd = |p: Dwell, m: Dwell| {
-                    [
-                        (p.d0 - m.d0) / (2.0 * h),
-                        (p.d2 - m.d2) / (2.0 * h),
-                        (p.ramp - m.ramp) / (2.0 * h),
-                    ]
-                };
-                let (da, db, dm) = (
-                    fd(with(ap, b), with(am, b)),
-                    fd(with(a, bp), with(a, bm)),
-                    fd(moved(ap, bp), moved(am, bm)),
+            for (ours, theirs) in gradient_pairs(&piece, q, &k, 1e-6 * r).into_iter().flatten() {
+                proptest::prop_assert!(
+                    ours.is_finite() && (ours - theirs).abs() <= tol,
+                    "{} against {} (tol {:e}, dwell {:?})", ours, theirs, tol, f
                 );
-                for (ours, theirs) in [
-                    (gr.d0a[c], da[0]),
-                    (gr.d0b[c], db[0]),
-                    (gr.d2a[c], da[1]),
-                    (gr.d2b[c], db[1]),
-                    (gr.d0m[c], dm[0]),
-                    (gr.d2m[c], dm[1]),
-                    (gr.rampm[c], dm[2]),
-                ] {
-                    proptest::prop_assert!(
-                        ours.is_finite() && (ours - theirs).abs() <= tol,
-                        "{} against {} (tol {:e}, dwell {:?})", ours, theirs, tol, f
-                    );
-                }
             }
         }
     }
@@ -2449,36 +2464,7 @@ mod tests {
                 if f.d0 == 0.0 {
                     continue;
                 }
-                let gr = piece.gradients(q, &k);
-                // Held time: move one end, scale the density so that `dens · len` stays.
-                let with = |a: (f64, f64), b: (f64, f64)| {
-                    let l = (b.0 - a.0).hypot(b.1 - a.1);
-                    Prepared::new(a, b, dens * piece.len / l).dwell(q, &k)
-                };
-                let moved = |a: (f64, f64), b: (f64, f64)| Prepared::new(a, b, dens).dwell(q, &k);
-                for c in 0..2 {
-                    let e = [(h, 0.0), (0.0, h)][c];
-                    let (ap, am) = ((a.0 + e.0, a.1 + e.1), (a.0 - e.0, a.1 - e.1));
-                    let (bp, bm) = ((b.0 + e.0, b.1 + e.1), (b.0 - e.0, b.1 - e.1));
-                    let fd = |p: Dwell, m: Dwell| {
-                        [
-                            (p.d0 - m.d0) / (2.0 * h),
-                            (p.d2 - m.d2) / (2.0 * h),
-                            (p.ramp - m.ramp) / (2.0 * h),
-                        ]
-                    };
-                    let da = fd(with(ap, b), with(am, b));
-                    let db = fd(with(a, bp), with(a, bm));
-                    let dm = fd(moved(ap, bp), moved(am, bm));
-                    let pairs = [
-                        (gr.d0a[c], da[0]),
-                        (gr.d0b[c], db[0]),
-                        (gr.d2a[c], da[1]),
-                        (gr.d2b[c], db[1]),
-                        (gr.d0m[c], dm[0]),
-                        (gr.d2m[c], dm[1]),
-                        (gr.rampm[c], dm[2]),
-                    ];
+                for (c, pairs) in gradient_pairs(&piece, q, &k, h).into_iter().enumerate() {
                     for (j, (ours, theirs)) in pairs.into_iter().enumerate() {
                         // Central differences are good to about 1e-9 of the values here.
                         let tol = 1e-6 * (1.0 + f.d0.abs() + f.d2.abs() + f.ramp.abs());
