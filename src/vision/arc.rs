@@ -954,7 +954,11 @@ impl Pixels {
         }
         // Only the rolling line decelerates at a constant rate (the arc's own speed change is in
         // its shape): its ramp is the only one.
-        let de = bezier_derivatives(g, x, 1.0);
+        let de = if G {
+            bezier_derivatives(g, x, 1.0)
+        } else {
+            [[0.0; 2]; 3]
+        };
         for (i, (o, &q)) in out.iter_mut().zip(&self.q).enumerate() {
             let (f, cover, m) = line[0].dwell_impl::<G>(q, &self.kernel);
             o.d0 += f.d0;
@@ -980,18 +984,12 @@ impl Pixels {
     /// Projected cost and residuals at the nonlinear parameters `x` (amplitudes eliminated).
     fn evaluate(&self, g: &ArcGeometry, x: &[f64; 3], mask: &Mask) -> Option<(f64, Vec<f64>)> {
         let out = self.outgoing(g, x);
-        let (_, res) = self.project(&out, mask)?;
+        let res = self.solve(&out, mask)?.res;
         Some((cost(&res, &mask.keep), res))
     }
 
-    /// Linear least squares of the amplitudes given the outgoing columns; returns the
-    /// amplitudes and the residuals (only over the mask's pixels).
-    fn project(&self, out: &[Dwell], mask: &Mask) -> Option<(DVector<f64>, Vec<f64>)> {
-        self.solve(out, mask)
-            .map(|s| (DVector::from_row_slice(&s.coef), s.res))
-    }
-
-    /// [`Pixels::project`], keeping what the Jacobian needs.
+    /// Linear least squares of the amplitudes given the outgoing columns: the amplitudes, the
+    /// residuals (only over the mask's pixels) and what the Jacobian needs.
     fn solve(&self, out: &[Dwell], mask: &Mask) -> Option<Solved> {
         // Accumulated in fixed-size arrays (bounds known at compile time): this loop over every
         // pixel was a third of the analysis when it indexed a `DMatrix`. Only the rows of the
