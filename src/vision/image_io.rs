@@ -19,16 +19,16 @@ impl RgbImage {
 
     /// Converts a decoded image (any bit depth, grey or colour) to RGB `f32`.
     ///
-    /// 8-bit RGB, what JPEG and most PNG photos decode to, goes through a 256-entry table of
-    /// `image`'s own conversion (`v / 255`): the same values, in a fifth of the time of the
-    /// generic per-pixel path (a 2400×1600 photo: some 20 ms of its 40 ms decode).
+    /// 8-bit RGB, what JPEG and most PNG photos decode to, is divided by 255 in one vectorised
+    /// pass: `image`'s own conversion to the bit, in a fifth of the time of its generic
+    /// per-pixel path (a 2400×1600 photo: some 20 ms of its 40 ms decode) and faster than a
+    /// 256-entry table.
     pub fn from_dynamic(img: image::DynamicImage) -> Self {
         if let image::DynamicImage::ImageRgb8(buf) = &img {
-            let lut: [f32; 256] = std::array::from_fn(|v| (v as f32 / 255.0).clamp(0.0, 1.0));
             return Self {
                 w: buf.width() as usize,
                 h: buf.height() as usize,
-                data: buf.as_raw().iter().map(|&v| lut[v as usize]).collect(),
+                data: buf.as_raw().iter().map(|&v| f32::from(v) / 255.0).collect(),
             };
         }
         let rgb = img.into_rgb32f();
@@ -101,7 +101,7 @@ fn jpeg_is_complete(path: &Path) -> Result<bool, String> {
 mod tests {
     use super::*;
 
-    /// The 8-bit table gives `image`'s own conversion to the bit, for every value and channel.
+    /// The 8-bit path gives `image`'s own conversion to the bit, for every value and channel.
     #[test]
     fn eight_bit_rgb_converts_as_image_does() {
         let raw: Vec<u8> = (0..=255u8).flat_map(|v| [v, 255 - v, v / 3]).collect();

@@ -1281,15 +1281,17 @@ pub fn analyse(
     scene_radius_px: Option<f64>,
     opts: &AnalysisOptions,
 ) -> Analysis {
-    let sat = background::saturated_fraction(img);
-    let max_sat = opts.max_saturated.unwrap_or(0.05);
-    if sat > max_sat {
+    let coarse = background::CoarsePhoto::of(img, opts.coarse_side);
+    if coarse.saturated > opts.max_saturated.unwrap_or(0.05) {
         return Analysis::declined(
             Status::Declined,
-            format!("saturated: {:.1}% of pixels at full scale", 100.0 * sat),
+            format!(
+                "saturated: {:.1}% of pixels at full scale",
+                100.0 * coarse.saturated
+            ),
         );
     }
-    let sig = match background::build(img, cloth, opts.coarse_side) {
+    let sig = match background::build_from(img, cloth, coarse) {
         Ok(s) => s,
         Err(e) => return Analysis::declined(Status::Declined, e),
     };
