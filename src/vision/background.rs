@@ -191,6 +191,37 @@ impl Projected<'_> {
     pub fn sample(&self, x: f64, y: f64) -> Option<f32> {
         self.src.sample_in(&self.tiles, x, y)
     }
+
+    /// The `f32` sum, in order, of the samples at `base[j] + off` (each coordinate `b + o`),
+    /// to the bit what adding [`Projected::sample`]s gives; `None` when one falls outside.
+    /// For a streak's cross-profile, whose points along the streak stay in one tile: the tile
+    /// is looked up once per change, and the sampler is inlined into the loop.
+    pub fn sum_along(&self, base: &[(f64, f64)], off: (f64, f64)) -> Option<f32> {
+        let (src, tiles) = (&self.src, &*self.tiles);
+        let mut key = usize::MAX;
+        let mut z: &[f32] = &[];
+        let mut acc = 0.0f32;
+        for &(bx, by) in base {
+            let (x0, y0, fx, fy) = bilinear_cell(bx + off.0, by + off.1, src.w, src.h)?;
+            let (tx, ty) = (x0 / TILE, y0 / TILE);
+            let k = ty * tiles.tw + tx;
+            if k != key {
+                key = k;
+                z = tiles.tiles[k].get_or_init(|| src.tile(tiles.u, tx, ty));
+            }
+            acc += bilinear_in_tile(z, x0 - tx * TILE, y0 - ty * TILE, fx, fy);
+        }
+        Some(acc)
+    }
+}
+
+/// Bilinear sample of a tile at cell `(cx, cy)` (within the tile), fractions `fx, fy`.
+#[inline(always)]
+fn bilinear_in_tile(z: &[f32], cx: usize, cy: usize, fx: f32, fy: f32) -> f32 {
+    let i = cy * (TILE + 1) + cx;
+    let a = z[i] + fx * (z[i + 1] - z[i]);
+    let b = z[i + TILE + 1] + fx * (z[i + TILE + 2] - z[i + TILE + 1]);
+    a + fy * (b - a)
 }
 
 /// The pixels a plane's tiles are formed from.
@@ -209,10 +240,7 @@ impl Source<'_> {
         let (x0, y0, fx, fy) = bilinear_cell(x, y, self.w, self.h)?;
         let (tx, ty) = (x0 / TILE, y0 / TILE);
         let z = tiles.tiles[ty * tiles.tw + tx].get_or_init(|| self.tile(tiles.u, tx, ty));
-        let i = (y0 - ty * TILE) * (TILE + 1) + (x0 - tx * TILE);
-        let a = z[i] + fx * (z[i + 1] - z[i]);
-        let b = z[i + TILE + 1] + fx * (z[i + TILE + 2] - z[i + TILE + 1]);
-        Some(a + fy * (b - a))
+        Some(bilinear_in_tile(z, x0 - tx * TILE, y0 - ty * TILE, fx, fy))
     }
 
     /// Tile `(tx, ty)`: rows and columns `TILE·t ..= TILE·(t + 1)`, clamped to the photo (a
@@ -1145,6 +1173,30 @@ mod tests {
             }
         }
         assert_eq!(inside, 10 * 7);
+        // Sums along a line of points crossing tile seams (x = 64, y = 128) are the samples
+        // added in order; a point that needs row 130 (y ≥ 129; the last is at 128.6 + the
+        // offset) makes the sum `None`.
+        let base: Vec<(f64, f64)> = (0..11)
+            .map(|j| (55.3 + 1.7 * j as f64, 120.6 + 0.8 * j as f64))
+            .collect();
+        for (off, inside) in [
+            ((0.0, 0.0), true),
+            ((-0.4, -0.1), true),
+            ((3.3, 0.35), true),
+            ((0.0, 0.5), false),
+            ((8.2, 6.9), false),
+        ] {
+            let by_sample = base.iter().try_fold(0.0f32, |acc, &(bx, by)| {
+                plane.sample(bx + off.0, by + off.1).map(|v| acc + v)
+            });
+            let summed = plane.sum_along(&base, off);
+            assert_eq!(
+                summed.map(f32::to_bits),
+                by_sample.map(f32::to_bits),
+                "{off:?}"
+            );
+            assert_eq!(summed.is_some(), inside, "{off:?}");
+        }
         // The same projector shares its tiles; a recoloured signal too (same pixels).
         let recoloured = sig.recoloured([0.2, 0.5, 0.3]);
         let again = recoloured.projected(u);

@@ -540,29 +540,22 @@ pub fn sample_profile(
     let plane = sig.projected(w);
     let mut t = Vec::with_capacity(2 * half as usize + 1);
     let mut v = Vec::with_capacity(2 * half as usize + 1);
+    // The points along the streak, `p + a d`, each offset by `tk n` below.
+    let base: Vec<(f64, f64)> = (0..n_a)
+        .map(|j| {
+            let a = (j as f64 + 0.5) / n_a as f64 * step - step / 2.0;
+            (p.0 + a * d.0, p.1 + a * d.1)
+        })
+        .collect();
     for k in -half..=half {
         let tk = k as f64;
-        let mut acc = 0.0f32;
-        let mut inside = true;
-        for j in 0..n_a {
-            let a = (j as f64 + 0.5) / n_a as f64 * step - step / 2.0;
-            let x = p.0 + a * d.0 + tk * n.0;
-            let y = p.1 + a * d.1 + tk * n.1;
-            match plane.sample(x, y) {
-                Some(v) => acc += v,
-                None => {
-                    inside = false;
-                    break;
-                }
-            }
-        }
-        // Near the border only the flanks may be cut off; the core must be complete.
-        if !inside {
+        let Some(acc) = plane.sum_along(&base, (tk * n.0, tk * n.1)) else {
+            // Near the border only the flanks may be cut off; the core must be complete.
             if tk.abs() <= 1.25 * r {
                 return None;
             }
             continue;
-        }
+        };
         t.push(tk);
         v.push((acc / n_a as f32) as f64);
     }
