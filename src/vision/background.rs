@@ -411,85 +411,88 @@ fn saturated_fraction(img: &RgbImage) -> f64 {
     sat as f64 / (img.w * img.h) as f64
 }
 
-pub(crate) fn block_mean(img: &RgbImage, f: usize) -> (usize, usize, Vec<[f32; 3]>) {
-    block_mean_fixed::<false>(img, Fixed::None, f).0
-}
+/// A grid of block means: its width and height in blocks, and the means row by row.
+pub(crate) type BlockGrid = (usize, usize, Vec<[f32; 3]>);
 
-/// [`block_mean`] and the number of the photo's pixels with a channel at full scale, in one
-/// pass: the photo's 46 MB of `f32` (2400×1600) are read once instead of twice.
-fn block_mean_saturated(img: &RgbImage, f: usize) -> ((usize, usize, Vec<[f32; 3]>), usize) {
-    block_mean_fixed::<true>(img, Fixed::None, f)
+pub(crate) fn block_mean(img: &RgbImage, f: usize) -> BlockGrid {
+    block_mean_fixed(img, Fixed::None, f)
 }
 
 /// [`block_mean`] of the photo minus the cloth's fixed part, to the bit what it gives for a
 /// subtracted copy of the photo (each row is subtracted into a buffer, then summed as one).
-/// With `COUNT`, also the number of pixels of the photo (all of it, the strips the blocks leave
-/// at its right and bottom edges included) with a channel at full scale, before anything is
-/// subtracted; 0 without.
-fn block_mean_fixed<const COUNT: bool>(
+fn block_mean_fixed(img: &RgbImage, fixed: Fixed, f: usize) -> BlockGrid {
+    let ([m], _) = block_means::<false, 1>(img, [(fixed, f)]);
+    m
+}
+
+/// [`block_mean_fixed`] for each `(fixed, f)` in one pass over the photo (a row is read from
+/// memory once and summed from cache for each), and, with `COUNT`, the number of the photo's
+/// pixels (all of them, the strips the blocks leave at its right and bottom edges included)
+/// with a channel at full scale, before anything is subtracted; 0 without.
+pub(crate) fn block_means<const COUNT: bool, const N: usize>(
     img: &RgbImage,
-    fixed: Fixed,
-    f: usize,
-) -> ((usize, usize, Vec<[f32; 3]>), usize) {
-    let (cw, ch) = (img.w / f, img.h / f);
+    grids: [(Fixed, usize); N],
+) -> ([BlockGrid; N], usize) {
     let mut buf = Vec::with_capacity(3 * img.w);
-    let mut out = vec![[0f32; 3]; cw * ch];
-    let norm = 1.0 / (f * f) as f32;
+    let mut out = grids.map(|(_, f)| {
+        let (cw, ch) = (img.w / f, img.h / f);
+        (cw, ch, vec![[0f32; 3]; cw * ch])
+    });
     let mut sat = 0usize;
-    let count = |p: &[f32]| usize::from(at_full_scale(p));
-    // Each block's sums take its pixels in the same order (row by row, left to right), four
-    // blocks at a time: twelve independent chains of additions instead of three, the same
-    // sums to the last bit.
-    const LANES: usize = 4;
-    for cy in 0..ch {
-        let blocks = &mut out[cy * cw..(cy + 1) * cw];
-        for y in cy * f..cy * f + f {
-            let row = fixed.row(&img.data, img.w, y, (0, img.w), &mut buf);
-            let mut quads = blocks.chunks_exact_mut(LANES);
-            for (q, group) in (&mut quads).enumerate() {
-                let mut acc: [[f32; 3]; LANES] = [group[0], group[1], group[2], group[3]];
-                for k in 0..f {
-                    for (l, a) in acc.iter_mut().enumerate() {
-                        let x = ((q * LANES + l) * f + k) * 3;
-                        a[0] += row[x];
-                        a[1] += row[x + 1];
-                        a[2] += row[x + 2];
-                        if COUNT {
-                            sat += count(&row[x..x + 3]);
-                        }
-                    }
-                }
-                group.copy_from_slice(&acc);
-            }
-            let done = cw - cw % LANES;
-            for (i, o) in quads.into_remainder().iter_mut().enumerate() {
-                let cx = done + i;
-                for x in cx * f..cx * f + f {
-                    o[0] += row[3 * x];
-                    o[1] += row[3 * x + 1];
-                    o[2] += row[3 * x + 2];
-                    if COUNT {
-                        sat += count(&row[3 * x..3 * x + 3]);
-                    }
-                }
-            }
-            if COUNT {
-                sat += row[3 * cw * f..].chunks_exact(3).map(count).sum::<usize>();
+    for y in 0..img.h {
+        for ((fixed, f), (cw, ch, sums)) in grids.iter().zip(out.iter_mut()) {
+            let cy = y / f;
+            if cy < *ch {
+                let row = fixed.row(&img.data, img.w, y, (0, img.w), &mut buf);
+                add_row(&mut sums[cy * *cw..(cy + 1) * *cw], row, *f);
             }
         }
+        if COUNT {
+            sat += img.data[3 * y * img.w..3 * (y + 1) * img.w]
+                .chunks_exact(3)
+                .map(|p| usize::from(at_full_scale(p)))
+                .sum::<usize>();
+        }
     }
-    if COUNT {
-        sat += img.data[3 * img.w * ch * f..]
-            .chunks_exact(3)
-            .map(count)
-            .sum::<usize>();
-    }
-    for o in &mut out {
-        for v in o.iter_mut() {
+    for ((_, f), (_, _, sums)) in grids.iter().zip(out.iter_mut()) {
+        let norm = 1.0 / (f * f) as f32;
+        for v in sums.iter_mut().flatten() {
             *v *= norm;
         }
     }
-    ((cw, ch, out), sat)
+    (out, sat)
+}
+
+/// Adds one row of pixels (interleaved) to the sums of the row of `blocks` it falls in, blocks
+/// `f` pixels wide. Each block's sums take its pixels in the same order (row by row, left to
+/// right), four blocks at a time: twelve independent chains of additions instead of three, the
+/// same sums to the last bit.
+#[inline]
+fn add_row(blocks: &mut [[f32; 3]], row: &[f32], f: usize) {
+    const LANES: usize = 4;
+    let cw = blocks.len();
+    let mut quads = blocks.chunks_exact_mut(LANES);
+    for (q, group) in (&mut quads).enumerate() {
+        let mut acc: [[f32; 3]; LANES] = [group[0], group[1], group[2], group[3]];
+        for k in 0..f {
+            for (l, a) in acc.iter_mut().enumerate() {
+                let x = ((q * LANES + l) * f + k) * 3;
+                a[0] += row[x];
+                a[1] += row[x + 1];
+                a[2] += row[x + 2];
+            }
+        }
+        group.copy_from_slice(&acc);
+    }
+    let done = cw - cw % LANES;
+    for (i, o) in quads.into_remainder().iter_mut().enumerate() {
+        let cx = done + i;
+        for x in cx * f..cx * f + f {
+            o[0] += row[3 * x];
+            o[1] += row[3 * x + 1];
+            o[2] += row[3 * x + 2];
+        }
+    }
 }
 
 pub fn median(v: &mut [f32]) -> f32 {
@@ -905,8 +908,9 @@ fn residual_of(c_img: &[[f32; 3]], bg: &[[f32; 3]]) -> Vec<[f32; 3]> {
         .collect()
 }
 
-/// A photo's block means on the coarse grid, and how much of it is at full scale: one pass
-/// over its pixels, read before anything else ([`build_from`]).
+/// A photo's block means on the coarse grid (with a texture map that fits it, also those of
+/// the photo minus the map), and how much of it is at full scale: one pass over its pixels,
+/// read before anything else ([`build_from`]).
 pub struct CoarsePhoto {
     /// Downsampling factor (pixels per block side) and grid size.
     f: usize,
@@ -914,6 +918,8 @@ pub struct CoarsePhoto {
     ch: usize,
     /// Block means, row by row.
     means: Vec<[f32; 3]>,
+    /// Block means of the photo minus the texture map, where `cloth` gave one that fits.
+    textured: Option<Vec<[f32; 3]>>,
     /// Fraction of the photo's pixels with a channel at full scale.
     pub saturated: f64,
 }
@@ -921,14 +927,25 @@ pub struct CoarsePhoto {
 impl CoarsePhoto {
     /// The block means of blocks `f` pixels wide, `f` chosen so that the longer side spans
     /// about `coarse_side` blocks.
-    pub fn of(img: &RgbImage, coarse_side: usize) -> CoarsePhoto {
+    pub fn of(img: &RgbImage, cloth: Cloth, coarse_side: usize) -> CoarsePhoto {
         let f = img.w.max(img.h).div_ceil(coarse_side.max(16)).max(1);
-        let ((cw, ch, means), sat) = block_mean_saturated(img, f);
+        let ((cw, ch, means), textured, sat) = match cloth {
+            Cloth::Texture(t) if t.fits(img) => {
+                let ([m, mt], sat) =
+                    block_means::<true, 2>(img, [(Fixed::None, f), (Fixed::Texture(t), f)]);
+                (m, Some(mt.2), sat)
+            }
+            _ => {
+                let ([m], sat) = block_means::<true, 1>(img, [(Fixed::None, f)]);
+                (m, None, sat)
+            }
+        };
         CoarsePhoto {
             f,
             cw,
             ch,
             means,
+            textured,
             saturated: sat as f64 / (img.w * img.h) as f64,
         }
     }
@@ -940,7 +957,7 @@ pub fn build<'a>(
     cloth: Cloth<'a>,
     coarse_side: usize,
 ) -> Result<Signal<'a>, String> {
-    build_from(img, cloth, CoarsePhoto::of(img, coarse_side))
+    build_from(img, cloth, CoarsePhoto::of(img, cloth, coarse_side))
 }
 
 /// [`build`] from the photo's block means, already formed.
@@ -966,6 +983,7 @@ pub fn build_from<'a>(
         cw,
         ch,
         means: c_img,
+        textured,
         ..
     } = coarse;
     // `diff`, the residual the signal is built on, with its channels' spread; with a texture,
@@ -991,8 +1009,10 @@ pub fn build_from<'a>(
         Cloth::Texture(t) => {
             let plain = surface_residual(&c_img);
             if t.fits(img) {
-                let with =
-                    surface_residual(&block_mean_fixed::<false>(img, Fixed::Texture(t), f).0.2);
+                let with = match &textured {
+                    Some(m) => surface_residual(m),
+                    None => surface_residual(&block_mean_fixed(img, Fixed::Texture(t), f).2),
+                };
                 if with.1.scatter() < plain.1.scatter() {
                     (with, Some(plain), Fixed::Texture(t), ClothModel::Texture)
                 } else {
@@ -1262,11 +1282,18 @@ mod tests {
                 data: by_copy(fixed),
             };
             for f in [2, 4, 5] {
-                let (a, b) = (
-                    block_mean_fixed::<false>(&img, fixed, f).0.2,
-                    block_mean(&copy, f).2,
-                );
+                let (a, b) = (block_mean_fixed(&img, fixed, f).2, block_mean(&copy, f).2);
                 assert_eq!(bits(a.as_flattened()), bits(b.as_flattened()), "f {f}");
+                // The same means from one pass that also sums the plain photo's.
+                let ([(_, _, plain), (_, _, both)], _) =
+                    super::block_means::<false, 2>(&img, [(Fixed::None, f), (fixed, f)]);
+                assert_eq!(bits(both.as_flattened()), bits(b.as_flattened()), "f {f}");
+                let alone = block_mean(&img, f).2;
+                assert_eq!(
+                    bits(plain.as_flattened()),
+                    bits(alone.as_flattened()),
+                    "f {f}"
+                );
             }
             for (x, y) in [(0, 0), (202, 130), (201, 129), (64, 65), (100, 7)] {
                 let k = 3 * (y * w + x);
@@ -1365,13 +1392,15 @@ mod tests {
         let want = spots.len() as f64 / (w * h) as f64;
         assert_eq!(super::saturated_fraction(&lit).to_bits(), want.to_bits());
         for f in [1, 2, 4, 5] {
-            let ((_, _, m), n) = super::block_mean_saturated(&lit, f);
+            let ([(_, _, m)], n) = super::block_means::<true, 1>(&lit, [(super::Fixed::None, f)]);
             assert_eq!(n, spots.len(), "f {f}");
             let plain_lit = super::block_mean(&lit, f).2;
             assert_eq!(m.as_flattened(), plain_lit.as_flattened());
         }
         assert_eq!(
-            super::CoarsePhoto::of(&lit, 40).saturated.to_bits(),
+            super::CoarsePhoto::of(&lit, super::Cloth::Surface, 40)
+                .saturated
+                .to_bits(),
             want.to_bits()
         );
         // A degree-4 surface on a 600 × 400 grid, one block lifted by a "ball".

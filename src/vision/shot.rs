@@ -1281,7 +1281,7 @@ pub fn analyse(
     scene_radius_px: Option<f64>,
     opts: &AnalysisOptions,
 ) -> Analysis {
-    let coarse = background::CoarsePhoto::of(img, opts.coarse_side);
+    let coarse = background::CoarsePhoto::of(img, cloth, opts.coarse_side);
     if coarse.saturated > opts.max_saturated.unwrap_or(0.05) {
         return Analysis::declined(
             Status::Declined,

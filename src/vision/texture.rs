@@ -17,7 +17,7 @@
 //! surface.
 
 use super::background::{
-    block_mean, box_blur, eval_surface, fit_cloth_poly, mad_sigma, mad_sigma_about, median,
+    Fixed, block_means, box_blur, eval_surface, fit_cloth_poly, mad_sigma, mad_sigma_about, median,
     median_of,
 };
 use super::image_io::RgbImage;
@@ -102,9 +102,10 @@ pub fn pick(n: usize) -> Vec<usize> {
 /// The residual of one photo from its own cloth surface, and its cloth mask.
 pub fn residual(img: &RgbImage, coarse_side: usize) -> Residual {
     let f = coarse_factor(img.w, img.h, coarse_side);
-    let (cw, ch, coarse) = block_mean(img, f);
+    // Both grids' block means from one pass over the photo.
+    let ([(cw, ch, coarse), (tw, th, blocks)], _) =
+        block_means::<false, 2>(img, [(Fixed::None, f), (Fixed::None, BLOCK)]);
     let coef = fit_cloth_poly(cw, ch, &coarse);
-    let (tw, th, blocks) = block_mean(img, BLOCK);
     let surface = eval_surface(&coef, tw, th, BLOCK as f64 / f as f64, cw as f64, ch as f64);
     let r: Vec<[f32; 3]> = blocks
         .iter()
