@@ -23,15 +23,15 @@ impl RgbImage {
     /// pass: `image`'s own conversion to the bit, in a fifth of the time of its generic
     /// per-pixel path (a 2400×1600 photo: some 20 ms of its 40 ms decode) and faster than a
     /// 256-entry table.
-    pub fn from_dynamic(img: image::DynamicImage) -> Self {
-        if let image::DynamicImage::ImageRgb8(buf) = &img {
+    pub fn from_dynamic(img: &image::DynamicImage) -> Self {
+        if let image::DynamicImage::ImageRgb8(buf) = img {
             return Self {
                 w: buf.width() as usize,
                 h: buf.height() as usize,
                 data: buf.as_raw().iter().map(|&v| f32::from(v) / 255.0).collect(),
             };
         }
-        let rgb = img.into_rgb32f();
+        let rgb = img.to_rgb32f();
         let (w, h) = (rgb.width() as usize, rgb.height() as usize);
         Self {
             w,
@@ -46,6 +46,12 @@ pub const MIN_SIDE: usize = 32;
 
 /// Reads and decodes an image file; the error is a human-readable reason for the table.
 pub fn load(path: &Path) -> Result<RgbImage, String> {
+    convert(&decode(path)?)
+}
+
+/// Reads and decodes an image file, as its decoder gives it (8 or 16 bits, grey or colour):
+/// the first half of [`load`].
+pub fn decode(path: &Path) -> Result<image::DynamicImage, String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read file: {e}"))?;
     if meta.len() == 0 {
         return Err("empty file (0 bytes)".into());
@@ -62,9 +68,14 @@ pub fn load(path: &Path) -> Result<RgbImage, String> {
     if reader.format() == Some(image::ImageFormat::Jpeg) && !jpeg_is_complete(path)? {
         return Err("corrupt image: truncated JPEG (no end-of-image marker)".into());
     }
-    let img = reader
+    reader
         .decode()
-        .map_err(|e| format!("corrupt or unsupported image: {e}"))?;
+        .map_err(|e| format!("corrupt or unsupported image: {e}"))
+}
+
+/// A decoded image as RGB `f32`, refused when too small to hold a shot: the second half of
+/// [`load`].
+pub fn convert(img: &image::DynamicImage) -> Result<RgbImage, String> {
     let out = RgbImage::from_dynamic(img);
     if out.w < MIN_SIDE || out.h < MIN_SIDE {
         return Err(format!(
@@ -107,7 +118,7 @@ mod tests {
         let raw: Vec<u8> = (0..=255u8).flat_map(|v| [v, 255 - v, v / 3]).collect();
         let buf = image::RgbImage::from_raw(16, 16, raw).unwrap();
         let dynamic = image::DynamicImage::ImageRgb8(buf);
-        let ours = RgbImage::from_dynamic(dynamic.clone());
+        let ours = RgbImage::from_dynamic(&dynamic);
         let theirs = dynamic.into_rgb32f();
         assert_eq!((ours.w, ours.h), (16, 16));
         let same = ours

@@ -344,7 +344,7 @@ mod tests {
     const B: [f64; 2] = [560.0, 190.0];
 
     fn to_float(img: &image::RgbImage) -> FloatImage {
-        FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
+        FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(img.clone()))
     }
 
     /// Samples, the true line's point and direction.

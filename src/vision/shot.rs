@@ -2958,7 +2958,7 @@ mod tests {
         let bd = Backdrop::plain(1200, 800, 1.0);
         let base = bd.base_plate();
         let to_float = |i: &image::RgbImage| {
-            FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(i.clone()))
+            FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(i.clone()))
         };
         let img = to_float(&render(&frame, &bd, &base, Some(7)));
         let plate = to_float(&render(&Frame::default(), &bd, &base, None));
@@ -3261,7 +3261,7 @@ mod tests {
         };
         let base = bd.base_plate();
         let to_float = |i: &image::RgbImage| {
-            FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(i.clone()))
+            FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(i.clone()))
         };
         // Leaked so the signal may borrow them for the rest of the test.
         let imgs: &'static (FloatImage, FloatImage) = Box::leak(Box::new((
