@@ -143,14 +143,31 @@ impl Fixed<'_> {
             Fixed::Texture(t) => {
                 let trow = t.row(y);
                 out.resize(src.len(), 0.0);
-                for ((x, o), v) in (x0..x1)
-                    .zip(out.chunks_exact_mut(3))
-                    .zip(src.chunks_exact(3))
-                {
-                    let tv = trow[t.column(x)];
+                let sub = |o: &mut [f32], v: &[f32], tv: &[f32; 3]| {
                     o[0] = v[0] - tv[0];
                     o[1] = v[1] - tv[1];
                     o[2] = v[2] - tv[2];
+                };
+                // The pixels of a whole cell share its value: taken run by run, not looked up
+                // pixel by pixel (this loop was 6 % of a realistic folder's time). A run
+                // starting inside a cell, and the clamped last column, are done singly.
+                const B: usize = super::texture::BLOCK;
+                let first = x0.next_multiple_of(B).min(x1);
+                let whole = (x1 / B).min(t.tw).max(first / B);
+                let end = (whole * B).max(first);
+                for x in (x0..first).chain(end..x1) {
+                    let k = 3 * (x - x0);
+                    sub(&mut out[k..k + 3], &src[k..k + 3], &trow[t.column(x)]);
+                }
+                let (o, v) = (3 * (first - x0), 3 * (end - x0));
+                for ((o, v), tv) in out[o..v]
+                    .chunks_exact_mut(3 * B)
+                    .zip(src[o..v].chunks_exact(3 * B))
+                    .zip(&trow[first / B..whole])
+                {
+                    for (o, v) in o.chunks_exact_mut(3).zip(v.chunks_exact(3)) {
+                        sub(o, v, tv);
+                    }
                 }
                 out
             }
@@ -1301,6 +1318,24 @@ mod tests {
                     bits(&fixed.pixel(&img.data, w, x, y)),
                     bits(&copy.data[k..k + 3])
                 );
+            }
+            // Runs of a row: whole texture cells, runs starting or ending inside a cell, the
+            // clamped last column (x = 202 of an odd width), empty and one-pixel runs.
+            let mut buf = Vec::new();
+            for (x0, x1) in [
+                (0, 203),
+                (1, 50),
+                (3, 4),
+                (7, 7),
+                (64, 129),
+                (200, 203),
+                (202, 203),
+            ] {
+                for y in [0, 64, 129, 130] {
+                    let row = fixed.row(&img.data, w, y, (x0, x1), &mut buf);
+                    let want = &copy.data[3 * (y * w + x0)..3 * (y * w + x1)];
+                    assert_eq!(bits(row), bits(want), "x {x0}..{x1} y {y}");
+                }
             }
             let lazy = test_signal(w, h, img.data.clone(), fixed);
             let copied = test_signal(w, h, copy.data.clone(), Fixed::None);
