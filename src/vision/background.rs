@@ -928,29 +928,30 @@ fn residual_of(c_img: &[[f32; 3]], bg: &[[f32; 3]]) -> Vec<[f32; 3]> {
 /// A photo's block means on the coarse grid (with a texture map that fits it, also those of
 /// the photo minus the map), and how much of it is at full scale: one pass over its pixels,
 /// read before anything else ([`build_from`]).
-pub struct CoarsePhoto {
+pub struct CoarsePhoto<'a> {
     /// Downsampling factor (pixels per block side) and grid size.
     f: usize,
     cw: usize,
     ch: usize,
     /// Block means, row by row.
     means: Vec<[f32; 3]>,
-    /// Block means of the photo minus the texture map, where `cloth` gave one that fits.
-    textured: Option<Vec<[f32; 3]>>,
+    /// Block means of the photo minus the texture map, where `cloth` gave one that fits, with
+    /// that map.
+    textured: Option<(&'a ClothTexture, Vec<[f32; 3]>)>,
     /// Fraction of the photo's pixels with a channel at full scale.
     pub saturated: f64,
 }
 
-impl CoarsePhoto {
+impl<'a> CoarsePhoto<'a> {
     /// The block means of blocks `f` pixels wide, `f` chosen so that the longer side spans
     /// about `coarse_side` blocks.
-    pub fn of(img: &RgbImage, cloth: Cloth, coarse_side: usize) -> CoarsePhoto {
+    pub fn of(img: &RgbImage, cloth: Cloth<'a>, coarse_side: usize) -> CoarsePhoto<'a> {
         let f = img.w.max(img.h).div_ceil(coarse_side.max(16)).max(1);
         let ((cw, ch, means), textured, sat) = match cloth {
             Cloth::Texture(t) if t.fits(img) => {
                 let ([m, mt], sat) =
                     block_means::<true, 2>(img, [(Fixed::None, f), (Fixed::Texture(t), f)]);
-                (m, Some(mt.2), sat)
+                (m, Some((t, mt.2)), sat)
             }
             _ => {
                 let ([m], sat) = block_means::<true, 1>(img, [(Fixed::None, f)]);
@@ -981,7 +982,7 @@ pub fn build<'a>(
 pub fn build_from<'a>(
     img: &'a RgbImage,
     cloth: Cloth<'a>,
-    coarse: CoarsePhoto,
+    coarse: CoarsePhoto<'a>,
 ) -> Result<Signal<'a>, String> {
     let plate = match cloth {
         Cloth::Plate(p) => Some(p),
@@ -1026,9 +1027,11 @@ pub fn build_from<'a>(
         Cloth::Texture(t) => {
             let plain = surface_residual(&c_img);
             if t.fits(img) {
+                // Formed with the photo's block means, unless they were formed for another
+                // cloth model.
                 let with = match &textured {
-                    Some(m) => surface_residual(m),
-                    None => surface_residual(&block_mean_fixed(img, Fixed::Texture(t), f).2),
+                    Some((tc, m)) if std::ptr::eq(*tc, t) => surface_residual(m),
+                    _ => surface_residual(&block_mean_fixed(img, Fixed::Texture(t), f).2),
                 };
                 if with.1.scatter() < plain.1.scatter() {
                     (with, Some(plain), Fixed::Texture(t), ClothModel::Texture)
@@ -1123,21 +1126,9 @@ pub fn box_blur(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
     if r == 0 {
         return src.to_vec();
     }
-    let mut tmp = vec![0f32; w * h];
-    let mut out = vec![0f32; w * h];
     let norm = 1.0 / (2 * r + 1) as f32;
-    for y in 0..h {
-        let row = &src[y * w..(y + 1) * w];
-        let mut s: f32 = (0..=2 * r)
-            .map(|k| row[k.saturating_sub(r).min(w - 1)])
-            .sum();
-        for x in 0..w {
-            tmp[y * w + x] = s * norm;
-            let add = (x + r + 1).min(w - 1);
-            let sub = x.saturating_sub(r);
-            s += row[add] - row[sub];
-        }
-    }
+    let tmp = blur_rows(src, w, h, r, norm);
+    let mut out = vec![0f32; w * h];
     // The columns' running sums advance together, row by row (the same additions in the same
     // order for each column as one column at a time, which strode through memory), each
     // started as `Iterator::sum` starts.
@@ -1160,10 +1151,8 @@ pub fn box_blur(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
     out
 }
 
-/// [`box_blur`] as first written, a column at a time: the definition it is tested against.
-#[cfg(test)]
-fn box_blur_by_columns(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
-    let norm = 1.0 / (2 * r + 1) as f32;
+/// [`box_blur`]'s first pass: each row's running sums of `2r + 1` values, times `norm`.
+fn blur_rows(src: &[f32], w: usize, h: usize, r: usize, norm: f32) -> Vec<f32> {
     let mut tmp = vec![0f32; w * h];
     for y in 0..h {
         let row = &src[y * w..(y + 1) * w];
@@ -1172,9 +1161,20 @@ fn box_blur_by_columns(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
             .sum();
         for x in 0..w {
             tmp[y * w + x] = s * norm;
-            s += row[(x + r + 1).min(w - 1)] - row[x.saturating_sub(r)];
+            let add = (x + r + 1).min(w - 1);
+            let sub = x.saturating_sub(r);
+            s += row[add] - row[sub];
         }
     }
+    tmp
+}
+
+/// [`box_blur`] as first written, its second pass a column at a time: the definition it is
+/// tested against.
+#[cfg(test)]
+fn box_blur_by_columns(src: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
+    let norm = 1.0 / (2 * r + 1) as f32;
+    let tmp = blur_rows(src, w, h, r, norm);
     let mut out = vec![0f32; w * h];
     for x in 0..w {
         let mut s: f32 = (0..=2 * r)

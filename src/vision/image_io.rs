@@ -21,8 +21,9 @@ impl RgbImage {
     ///
     /// 8-bit RGB, what JPEG and most PNG photos decode to, is divided by 255 in one vectorised
     /// pass: `image`'s own conversion to the bit, in a fifth of the time of its generic
-    /// per-pixel path (a 2400×1600 photo: some 20 ms of its 40 ms decode) and faster than a
-    /// 256-entry table.
+    /// per-pixel path (a 2400×1600 photo: some 20 ms of its 40 ms decode). A 256-entry table
+    /// of the same values took about as long (3.9 % against 3.5 % of eight clean photos'
+    /// time, session 35): both are bound by writing the 46 MB.
     pub fn from_dynamic(img: &image::DynamicImage) -> Self {
         if let image::DynamicImage::ImageRgb8(buf) = img {
             return Self {
