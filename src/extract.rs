@@ -20,7 +20,7 @@ use crate::scene::{ImageScene, SceneConfig};
 use crate::synth::materials::Materials;
 use crate::table::{ShotRow, Status, TableFormat, write_angle_table};
 use crate::vision::{
-    Analysis, AnalysisOptions, Cloth, analyse,
+    Analysis, AnalysisOptions, Cloth, Plate, analyse,
     image_io::{self, RgbImage},
     overlay,
     texture::{self, ClothTexture},
@@ -284,7 +284,7 @@ pub fn folder_textures_keeping(
 pub fn process(
     job: &Job,
     decoded: Option<image::DynamicImage>,
-    plate: Option<&Result<Arc<RgbImage>, String>>,
+    plate: Option<&Result<Arc<Plate>, String>>,
     texture: Option<&ClothTexture>,
     overlays: Option<&Path>,
     opts: &AnalysisOptions,
@@ -431,12 +431,12 @@ pub fn ball_friction_bounds(jobs: &[Job]) -> HashMap<String, f64> {
 }
 
 /// The background plates the jobs name, each decoded once, to be shared by its photos.
-pub fn decode_plates(jobs: &[Job]) -> HashMap<PathBuf, Result<Arc<RgbImage>, String>> {
+pub fn decode_plates(jobs: &[Job]) -> HashMap<PathBuf, Result<Arc<Plate>, String>> {
     let mut plates = HashMap::new();
     for p in jobs.iter().filter_map(|j| j.plate.as_ref()) {
         plates.entry(p.clone()).or_insert_with(|| {
             image_io::load(p)
-                .map(Arc::new)
+                .map(|img| Arc::new(Plate::new(img)))
                 .map_err(|e| format!("background plate '{}': {e}", p.display()))
         });
     }

@@ -1135,6 +1135,7 @@ fn the_overlay_draws_the_arc_that_gives_delta1() {
     synth(&dir, "clean", 1, 7, &["--psi", "30:40", "--background"]);
     let img = image_io::load(&dir.join("shot_001.png")).unwrap();
     let plate = image_io::load(&dir.join("background.png")).unwrap();
+    let plate = streakfit::vision::Plate::new(plate);
     let a = analyse(
         &img,
         Cloth::Plate(&plate),

@@ -416,7 +416,9 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
     for j in &jobs {
         let img = image_io::load(&j.path).map_err(|e| anyhow!("{}: {e}", j.path.display()))?;
         let plate = match &j.plate {
-            Some(p) => Some(image_io::load(p).map_err(|e| anyhow!("{}: {e}", p.display()))?),
+            Some(p) => Some(crate::vision::Plate::new(
+                image_io::load(p).map_err(|e| anyhow!("{}: {e}", p.display()))?,
+            )),
             None => None,
         };
         let texture = textures

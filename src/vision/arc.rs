@@ -2190,6 +2190,7 @@ mod tests {
     /// noise-free plate.
     fn measure(frame: &Frame, g: &ArcGeometry, noise: f64, seed: Option<u64>) -> ArcFit {
         let (img, plate) = rendering(frame, noise, seed);
+        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         fit(&sig, sig.u, g).expect("arc fit")
     }
@@ -2312,6 +2313,7 @@ mod tests {
         let (delta, theta) = (100f64.to_radians(), 125f64.to_radians());
         let (frame, g) = scene(delta, theta, 0.55 * R, 0.6 * R);
         let (img, plate) = rendering(&frame, 0.02, Some(3));
+        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let px = Pixels::gather(&sig, sig.u, &g, &[[delta, 0.55 * R, 0.6 * R]], 2);
         let n = px.q.len();
@@ -2420,6 +2422,7 @@ mod tests {
         let (delta, theta) = (100f64.to_radians(), 125f64.to_radians());
         let (frame, g) = scene(delta, theta, 0.55 * R, 0.6 * R);
         let (img, plate) = rendering(&frame, 0.005, Some(1));
+        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let fit_to = |max_end: Option<f64>| fit(&sig, sig.u, &ArcGeometry { max_end, ..g });
         // The true arc ends 0.55 R cos 25° + 0.6 R = 1.10 R along θ.
@@ -2770,6 +2773,7 @@ mod tests {
             let base = bd.base_plate();
             let img = to_float(&render(&frame, &bd, &base, Some(seed)));
             let plate = to_float(&render(&Frame::default(), &bd, &base, None));
+            let plate = crate::vision::Plate::new(plate);
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
             match fit(&sig, sig.u, &g) {

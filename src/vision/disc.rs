@@ -762,6 +762,7 @@ mod tests {
         let base = bd.base_plate();
         let img = to_float(&render::render(&frame, &bd, &base, seed));
         let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
+        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let coarse = CoarseDisc {
             cx: c.0 - 0.5 + 2.0,
@@ -867,6 +868,7 @@ mod tests {
             discs: vec![ball(w, 0.45), ball(q, 0.3)],
         };
         let (img, plate) = signal_of(&crept);
+        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let true_dir = (q.1 - w.1).atan2(q.0 - w.0);
         for from in [w, q] {
@@ -906,6 +908,7 @@ mod tests {
             },
         ] {
             let (img, plate) = signal_of(&frame);
+            let plate = crate::vision::Plate::new(plate);
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
             let c = companion(&sig, &start(&sig, w));
@@ -944,6 +947,7 @@ mod tests {
         let base = bd.base_plate();
         let img = to_float(&render::render(&frame, &bd, &base, Some(7)));
         let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
+        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let cos = |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| f64::from(a[c] * b[c])).sum::<f64>();
         let on_red = mean_colour(&sig, (300.0, 60.0), 20.0).expect("red streak");

@@ -376,6 +376,7 @@ mod tests {
         let base = bd.base_plate();
         let img = to_float(&render::render(&frame, &bd, &base, Some(seed)));
         let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
+        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let p = (A[0] - 0.5, A[1] - 0.5);
         let l = (B[0] - A[0]).hypot(B[1] - A[1]);

@@ -55,5 +55,5 @@ pub mod shot;
 pub mod streak;
 pub mod texture;
 
-pub use background::{Cloth, ClothModel};
+pub use background::{Cloth, ClothModel, Plate};
 pub use shot::{Analysis, AnalysisOptions, PathModels, analyse};

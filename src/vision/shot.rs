@@ -2966,6 +2966,7 @@ mod tests {
             ball_friction_max: friction,
             ..AnalysisOptions::default()
         };
+        let plate = crate::vision::Plate::new(plate);
         analyse(&img, Cloth::Plate(&plate), Some(r), &opts)
     }
 
@@ -3264,9 +3265,9 @@ mod tests {
             FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(i.clone()))
         };
         // Leaked so the signal may borrow them for the rest of the test.
-        let imgs: &'static (FloatImage, FloatImage) = Box::leak(Box::new((
+        let imgs: &'static (FloatImage, crate::vision::Plate) = Box::leak(Box::new((
             to_float(&render(&frame, &bd, &base, None)),
-            to_float(&render(&Frame::default(), &bd, &base, None)),
+            crate::vision::Plate::new(to_float(&render(&Frame::default(), &bd, &base, None))),
         )));
         background::build(&imgs.0, background::Cloth::Plate(&imgs.1), 600).expect("signal")
     }
