@@ -412,13 +412,13 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
     // per folder, outside the per-image times).
     let side = crate::vision::AnalysisOptions::default().coarse_side;
     let textures = crate::extract::folder_textures(&jobs, &jobs, side, false);
+    // Each plate decoded once and shared by its photos, its block means with it.
+    let plates = crate::extract::decode_plates(&jobs);
     let mut images = Vec::new();
     for j in &jobs {
         let img = image_io::load(&j.path).map_err(|e| anyhow!("{}: {e}", j.path.display()))?;
-        let plate = match &j.plate {
-            Some(p) => Some(crate::vision::Plate::new(
-                image_io::load(p).map_err(|e| anyhow!("{}: {e}", p.display()))?,
-            )),
+        let plate = match j.plate.as_ref().and_then(|p| plates.get(p)) {
+            Some(p) => Some(p.clone().map_err(|e| anyhow!("{e}"))?),
             None => None,
         };
         let texture = textures
@@ -464,7 +464,7 @@ pub fn extract_rows(out: &Path, shots: usize, seed: u64, tier: &str) -> Result<V
             let mut a = None;
             for _ in 0..3 {
                 let start = Instant::now();
-                let cloth = Cloth::of(plate.as_ref(), texture.as_deref());
+                let cloth = Cloth::of(plate.as_deref(), texture.as_deref());
                 let r = analyse(img, cloth, *scale_r, &opts);
                 best = best.min(start.elapsed().as_secs_f64());
                 a = Some(r);

@@ -37,7 +37,7 @@
 //! amplitudes enter linearly and are eliminated (variable projection); `δ, L₀, L₁` are found by
 //! Levenberg–Marquardt from the best of a few starts on the measured rolling line, with the
 //! projected residuals' Jacobian in closed form (Golub–Pereyra, from each piece's dwell
-//! differentiated with respect to its ends: [`Prepared::gradients`]). `θ` and `P`
+//! differentiated with respect to its ends: [`Prepared::gradients_of`]). `θ` and `P`
 //! come from the centre-line fit (they are far better determined there). Pixels of the object
 //! ball (its waiting disc and its streak) are left out; outliers beyond 4 MAD are dropped once.
 //! Where the cloth's blotches dominate the residual (photos without a plate), `δ` comes from the
@@ -314,7 +314,7 @@ enum Cover {
     Part,
 }
 
-/// Gradients of one piece's dwell (see [`Prepared::gradients`]), image `(x, y)` components.
+/// Gradients of one piece's dwell (see [`Prepared::gradients_of`]), image `(x, y)` components.
 #[derive(Debug, Default, Clone, Copy, PartialEq)]
 struct PieceGrad {
     /// `∂D₀/∂a`, `∂D₀/∂b`, `∂D₂/∂a`, `∂D₂/∂b` with the piece's time `dens · len` held (an arc
@@ -447,11 +447,21 @@ impl Prepared {
         (q.0 - self.a.0) * self.d.0 + (q.1 - self.a.1) * self.d.1
     }
 
-    /// The gradients of the dwell of pixel `q` ([`PieceGrad`]; [`Moments::gradients`]). Where
-    /// the inner radius holds the whole piece, `D₀ = T` (its time) does not move and `D₂ = T/R²
-    /// (|m - q|² + len²/12)` (`m` its middle).
+    /// The gradients of the dwell of pixel `q` ([`PieceGrad`]; [`Moments::gradients`]), on
+    /// their own: what the tests compare with differences of the dwell.
+    #[cfg(test)]
     fn gradients(&self, q: (f64, f64), k: &Kernel) -> PieceGrad {
         let (_, cover, m) = self.dwell_impl::<true>(q, k);
+        self.gradients_of(q, cover, &m, k)
+    }
+
+    /// The gradients of the dwell of pixel `q` ([`PieceGrad`]) from what
+    /// [`Prepared::dwell_impl`] returned for it: [`Moments::gradients`] where the kernel
+    /// covers the piece partly. Where the inner radius holds it whole, `D₀ = T` (its time)
+    /// does not move and `D₂ = T/R² (|m - q|² + len²/12)` (`m` its middle);
+    /// [`Pixels::outgoing_with`] folds the same formula into each arc piece's end derivatives
+    /// once, outside its loop over the pixels.
+    fn gradients_of(&self, q: (f64, f64), cover: Cover, m: &Moments, k: &Kernel) -> PieceGrad {
         match cover {
             Cover::Out => PieceGrad::default(),
             Cover::Part => m.gradients(self, self.along(q), k),
@@ -875,7 +885,7 @@ impl Pixels {
 
     /// [`Pixels::outgoing`] (the same values to the bit) and each cell's derivatives of its
     /// outgoing dwell with respect to `x = (δ, L₀, L₁)`: every piece's end gradients
-    /// ([`Prepared::gradients`]) through the Bézier's ([`bezier_derivatives`]); an arc piece's
+    /// ([`Prepared::gradients_of`]) through the Bézier's ([`bezier_derivatives`]); an arc piece's
     /// time `2L₁/N` adds `D/L₁` to `∂/∂L₁`; the rolling line moves with `P₁ = B(1)`.
     fn outgoing_grad(&self, g: &ArcGeometry, x: &[f64; 3]) -> (Vec<Dwell>, Vec<[Dwell; 3]>) {
         self.outgoing_with::<true>(g, x)
@@ -967,11 +977,11 @@ impl Pixels {
             if !G {
                 continue;
             }
-            let gr = match cover {
-                Cover::Out => continue,
-                Cover::Part => m.gradients(&line[0], line[0].along(q), &self.kernel),
-                Cover::Inner => line[0].gradients(q, &self.kernel),
-            };
+            if cover == Cover::Out {
+                continue;
+            }
+            // From the dwell just computed, not a second pass over the piece.
+            let gr = line[0].gradients_of(q, cover, &m, &self.kernel);
             for (d, e) in dout[i].iter_mut().zip(&de) {
                 d.d0 += dot(gr.d0m, *e);
                 d.d2 += dot(gr.d2m, *e);
@@ -1527,8 +1537,8 @@ fn lm_free(
     pin_delta: bool,
 ) -> Option<([f64; 3], Vec<f64>)> {
     let keep = &mask.keep;
-    // Each point with its Jacobian (closed form, [`Pixels::jacobian`]): the cost is the same
-    // to the bit as [`Pixels::evaluate`]'s.
+    // Each point with its normal equations (closed form, [`Pixels::normal_equations`]): the
+    // cost is the same to the bit as [`Pixels::evaluate`]'s.
     type Normal = ([[f64; 3]; 3], [f64; 3]);
     let eval = |x: &[f64; 3]| -> Option<(f64, Vec<f64>, Normal)> {
         let (out, dout) = px.outgoing_grad(g, x);
@@ -2118,8 +2128,8 @@ fn dump(px: &Pixels, res: &[f64], keep: &[bool], path: &std::path::Path) {
 mod tests {
     use super::*;
     use crate::synth::render::{Backdrop, Frame, Segment, render};
-    use crate::vision::background;
     use crate::vision::image_io::RgbImage as FloatImage;
+    use crate::vision::{Plate, background};
 
     const R: f64 = 40.0;
 
@@ -2190,19 +2200,18 @@ mod tests {
     /// noise-free plate.
     fn measure(frame: &Frame, g: &ArcGeometry, noise: f64, seed: Option<u64>) -> ArcFit {
         let (img, plate) = rendering(frame, noise, seed);
-        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         fit(&sig, sig.u, g).expect("arc fit")
     }
 
     /// A rendering of `frame` on a plain 520×420 cloth with sensor noise `a = b = noise`
     /// (seeded), and its noise-free plate.
-    fn rendering(frame: &Frame, noise: f64, seed: Option<u64>) -> (FloatImage, FloatImage) {
+    fn rendering(frame: &Frame, noise: f64, seed: Option<u64>) -> (FloatImage, Plate) {
         let bd = Backdrop::plain(520, 420, noise);
         let base = bd.base_plate();
         (
             to_float(&render(frame, &bd, &base, seed)),
-            to_float(&render(&Frame::default(), &bd, &base, None)),
+            Plate::new(to_float(&render(&Frame::default(), &bd, &base, None))),
         )
     }
 
@@ -2313,7 +2322,6 @@ mod tests {
         let (delta, theta) = (100f64.to_radians(), 125f64.to_radians());
         let (frame, g) = scene(delta, theta, 0.55 * R, 0.6 * R);
         let (img, plate) = rendering(&frame, 0.02, Some(3));
-        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let px = Pixels::gather(&sig, sig.u, &g, &[[delta, 0.55 * R, 0.6 * R]], 2);
         let n = px.q.len();
@@ -2422,7 +2430,6 @@ mod tests {
         let (delta, theta) = (100f64.to_radians(), 125f64.to_radians());
         let (frame, g) = scene(delta, theta, 0.55 * R, 0.6 * R);
         let (img, plate) = rendering(&frame, 0.005, Some(1));
-        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let fit_to = |max_end: Option<f64>| fit(&sig, sig.u, &ArcGeometry { max_end, ..g });
         // The true arc ends 0.55 R cos 25° + 0.6 R = 1.10 R along θ.
@@ -2773,7 +2780,7 @@ mod tests {
             let base = bd.base_plate();
             let img = to_float(&render(&frame, &bd, &base, Some(seed)));
             let plate = to_float(&render(&Frame::default(), &bd, &base, None));
-            let plate = crate::vision::Plate::new(plate);
+            let plate = Plate::new(plate);
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
             match fit(&sig, sig.u, &g) {
