@@ -180,7 +180,7 @@ pub fn folder_textures(
 }
 
 /// Decoded photos kept from the texture maps for their own analysis ([`process`]), by path.
-pub type Decoded = HashMap<PathBuf, image::DynamicImage>;
+pub type Decoded = HashMap<PathBuf, RgbImage>;
 
 /// Bytes of decoded photos [`run`] keeps from the texture maps: all 15 of a folder of
 /// 2400×1600 8-bit photos (11.5 MB each), some of larger ones.
@@ -214,25 +214,22 @@ pub fn folder_textures_keeping(
             continue;
         }
         let t0 = Instant::now();
-        let read: Vec<(texture::Residual, Option<(PathBuf, image::DynamicImage)>)> =
-            texture::pick(js.len())
-                .par_iter()
-                .filter_map(|&i| {
-                    let path = &js[i].path;
-                    let d = image_io::decode(path).ok()?;
-                    let r = texture::residual(&image_io::convert(&d).ok()?, coarse_side);
-                    // A wanted photo is kept while the budget lasts (which ones, when photos
-                    // race for its last bytes, changes only what is decoded twice).
-                    let n = d.as_bytes().len();
-                    let room = keep.contains(path.as_path())
-                        && kept_bytes
-                            .fetch_update(Relaxed, Relaxed, |k| {
-                                (k + n <= keep_bytes).then_some(k + n)
-                            })
-                            .is_ok();
-                    Some((r, room.then(|| (path.clone(), d))))
-                })
-                .collect();
+        let read: Vec<(texture::Residual, Option<(PathBuf, RgbImage)>)> = texture::pick(js.len())
+            .par_iter()
+            .filter_map(|&i| {
+                let path = &js[i].path;
+                let d = image_io::load(path).ok()?;
+                let r = texture::residual(&d, coarse_side);
+                // A wanted photo is kept while the budget lasts (which ones, when photos
+                // race for its last bytes, changes only what is decoded twice).
+                let n = d.byte_len();
+                let room = keep.contains(path.as_path())
+                    && kept_bytes
+                        .fetch_update(Relaxed, Relaxed, |k| (k + n <= keep_bytes).then_some(k + n))
+                        .is_ok();
+                Some((r, room.then(|| (path.clone(), d))))
+            })
+            .collect();
         let mut res = Vec::with_capacity(read.len());
         for (r, d) in read {
             res.push(r);
@@ -283,7 +280,7 @@ pub fn folder_textures_keeping(
 /// from its file.
 pub fn process(
     job: &Job,
-    decoded: Option<image::DynamicImage>,
+    decoded: Option<RgbImage>,
     plate: Option<&Result<Arc<Plate>, String>>,
     texture: Option<&ClothTexture>,
     overlays: Option<&Path>,
@@ -296,7 +293,7 @@ pub fn process(
         .clone()
         .unwrap_or_else(|| "unknown".into());
     let img = match decoded {
-        Some(d) => image_io::convert(&d),
+        Some(d) => Ok(d),
         None => image_io::load(&job.path),
     };
     let mut row = match img {

@@ -25,8 +25,9 @@ pub mod vision;
 /// Keeps freed memory in the process instead of returning it to the kernel after every use.
 ///
 /// The extractor allocates and frees scratch arrays of a few hundred kB thousands of times per
-/// photo (the arc fit's columns and residuals at each evaluation) and a decoded photo of about
-/// 46 MB per file. glibc serves blocks above its mmap threshold (128 kB to start) from fresh
+/// photo (the arc fit's columns and residuals at each evaluation) and a decoded photo per file
+/// (11.5 MB of bytes at 2400×1600 since session 36, 46 MB of `f32` before and for 16-bit
+/// photos). glibc serves blocks above its mmap threshold (128 kB to start) from fresh
 /// pages and trims the heap's top when it frees, so each one cost page faults and the kernel's
 /// zeroing: 13–22 % of a folder's time was system time on 2 cores (`extract --jobs 2`, 48
 /// photos: 1.4–2.5 s in 10.8–11.3 s). With blocks up to 64 MB kept on the heap and trimming

@@ -276,17 +276,13 @@ mod extraction {
     }
 
     fn flat(w: usize, h: usize, v: [f32; 3]) -> RgbImage {
-        RgbImage {
-            w,
-            h,
-            data: (0..w * h).flat_map(|_| v).collect(),
-        }
+        RgbImage::from_f32(w, h, (0..w * h).flat_map(|_| v).collect())
     }
 
     /// Cloth-coloured image with deterministic pseudo-noise.
     fn cloth(w: usize, h: usize) -> RgbImage {
         let mut img = flat(w, h, [0.08, 0.25, 0.12]);
-        for (i, v) in img.data.iter_mut().enumerate() {
+        for (i, v) in img.f32_mut().iter_mut().enumerate() {
             let n = ((i as u64).wrapping_mul(2654435761) % 1000) as f32 / 1000.0 - 0.5;
             *v += 0.01 * n;
         }
@@ -298,7 +294,7 @@ mod extraction {
             for x in 0..img.w {
                 if (x as f64 + 0.5 - cx).hypot(y as f64 + 0.5 - cy) < r {
                     let i = 3 * (y * img.w + x);
-                    img.data[i..i + 3].copy_from_slice(&colour);
+                    img.f32_mut()[i..i + 3].copy_from_slice(&colour);
                 }
             }
         }
@@ -427,7 +423,8 @@ mod extraction {
                     let i = 3 * (y * img.w + x);
                     let f = 0.04 * (1.0 - (dist / r).powi(2)).sqrt() as f32;
                     for c in 0..3 {
-                        img.data[i + c] += f * (0.9 - img.data[i + c]);
+                        let v = &mut img.f32_mut()[i + c];
+                        *v += f * (0.9 - *v);
                     }
                 }
             }

@@ -231,11 +231,11 @@ impl Summary {
 fn perturbed(img: &image_io::RgbImage, amplitude: f64, seed: u64) -> image_io::RgbImage {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let a = amplitude as f32;
-    image_io::RgbImage {
-        w: img.w,
-        h: img.h,
-        data: img.data.iter().map(|v| v + rng.gen_range(-a..=a)).collect(),
-    }
+    let s = img.samples();
+    let data = (0..s.len())
+        .map(|k| s.at(k) + rng.gen_range(-a..=a))
+        .collect();
+    image_io::RgbImage::from_f32(img.w, img.h, data)
 }
 
 /// The true angles per file of the `truth.csv` in `dir`, if there is one.
@@ -409,17 +409,17 @@ mod tests {
     /// The perturbation is as wide as asked, centred, and the same for the same seed.
     #[test]
     fn the_perturbation_is_tiny_uniform_and_seeded() {
-        let img = image_io::RgbImage {
-            w: 100,
-            h: 100,
-            data: vec![0.5; 30_000],
-        };
+        let img = image_io::RgbImage::from_f32(100, 100, vec![0.5; 30_000]);
         let a = perturbed(&img, 1e-6, seed("shot_001.png", 1));
         let b = perturbed(&img, 1e-6, seed("shot_001.png", 1));
         let c = perturbed(&img, 1e-6, seed("shot_001.png", 2));
-        assert_eq!(a.data, b.data);
-        assert_ne!(a.data, c.data);
-        let d: Vec<f64> = a.data.iter().map(|v| (*v - 0.5) as f64).collect();
+        let f = |i: &image_io::RgbImage| match &i.data {
+            image_io::Samples::F32(v) => v.clone(),
+            image_io::Samples::U8(_) => panic!("a perturbed photo holds f32"),
+        };
+        assert_eq!(f(&a), f(&b));
+        assert_ne!(f(&a), f(&c));
+        let d: Vec<f64> = f(&a).iter().map(|v| (*v - 0.5) as f64).collect();
         // Within the half-width plus half an f32 step at 0.5 (3e-8).
         assert!(d.iter().all(|x| x.abs() <= 1.03e-6));
         let mean = d.iter().sum::<f64>() / d.len() as f64;

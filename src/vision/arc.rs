@@ -2193,7 +2193,7 @@ mod tests {
     }
 
     fn to_float(img: &image::RgbImage) -> FloatImage {
-        FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(img.clone()))
+        FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
     }
 
     /// The arc fit on a rendering with sensor noise `a = b = noise` (seeded), against a

@@ -18,7 +18,7 @@
 //! weights the channels by it. A ball of the cloth's own hue (black, or green on green) gains
 //! nothing, as it should: its light then differs from the cloth only as a blotch does.
 
-use super::image_io::RgbImage;
+use super::image_io::{Px, RgbImage, Samples};
 use super::texture::ClothTexture;
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -33,7 +33,7 @@ pub struct Signal<'a> {
     /// are taken where sampled (after the cloth's fixed part, [`Signal::fixed`], is taken off),
     /// and local baselines are subtracted where used, so the cloth surface need not be
     /// evaluated at full resolution.
-    pub rgb: std::borrow::Cow<'a, [f32]>,
+    pub rgb: std::borrow::Cow<'a, Samples>,
     /// The cloth's fixed part, taken off each pixel where it is read: a copy of the photo minus
     /// a plate or a texture map would be 46 MB of page faults at 2400×1600 (13 ms a photo),
     /// for the few per cent of its pixels the samplers read.
@@ -97,7 +97,7 @@ pub enum Fixed<'a> {
     #[default]
     None,
     /// A plate of the empty table, interleaved as the photo.
-    Plate(&'a [f32]),
+    Plate(Px<'a>),
     /// The folder's cloth texture.
     Texture(&'a ClothTexture),
 }
@@ -106,12 +106,12 @@ impl Fixed<'_> {
     /// Pixel `(x, y)` of the photo `rgb` (`w` wide) minus the fixed part, channel by channel:
     /// the same `f32` differences a subtracted copy of the photo would hold.
     #[inline]
-    pub fn pixel(&self, rgb: &[f32], w: usize, x: usize, y: usize) -> [f32; 3] {
+    pub fn pixel(&self, rgb: Px, w: usize, x: usize, y: usize) -> [f32; 3] {
         let k = 3 * (y * w + x);
-        let v = [rgb[k], rgb[k + 1], rgb[k + 2]];
+        let v = [rgb.at(k), rgb.at(k + 1), rgb.at(k + 2)];
         match self {
             Fixed::None => v,
-            Fixed::Plate(p) => [v[0] - p[k], v[1] - p[k + 1], v[2] - p[k + 2]],
+            Fixed::Plate(p) => [v[0] - p.at(k), v[1] - p.at(k + 1), v[2] - p.at(k + 2)],
             Fixed::Texture(t) => {
                 let tv = t.at(x, y);
                 [v[0] - tv[0], v[1] - tv[1], v[2] - tv[2]]
@@ -119,34 +119,49 @@ impl Fixed<'_> {
         }
     }
 
-    /// Pixels `x0..x1` of row `y` minus the fixed part, into `out` (interleaved); returns the
-    /// row itself, without a copy, when nothing is subtracted.
+    /// Pixels `x0..x1` of row `y` minus the fixed part, as `f32` (interleaved); borrowed from
+    /// the photo, without a copy, when it holds `f32` and nothing is subtracted, else written
+    /// into `out`.
     pub fn row<'r>(
         &self,
-        rgb: &'r [f32],
+        rgb: Px<'r>,
         w: usize,
         y: usize,
         (x0, x1): (usize, usize),
         out: &'r mut Vec<f32>,
     ) -> &'r [f32] {
-        let src = &rgb[3 * (y * w + x0)..3 * (y * w + x1)];
+        let (a, b) = (3 * (y * w + x0), 3 * (y * w + x1));
+        if let Fixed::None = self {
+            return rgb.span(a, b, out);
+        }
+        rgb.span_into(a, b, out);
+        self.take_off(out, w, y, (x0, x1));
+        out
+    }
+
+    /// Takes the fixed part off pixels `x0..x1` of row `y`, held in `row` (interleaved): each
+    /// value `v` becomes `v - fixed`, as [`Fixed::pixel`] forms it.
+    pub fn take_off(&self, row: &mut [f32], w: usize, y: usize, (x0, x1): (usize, usize)) {
+        debug_assert_eq!(row.len(), 3 * (x1 - x0));
+        let (a, b) = (3 * (y * w + x0), 3 * (y * w + x1));
         match self {
-            Fixed::None => src,
-            Fixed::Plate(p) => {
-                let q = &p[3 * (y * w + x0)..3 * (y * w + x1)];
-                out.resize(src.len(), 0.0);
-                for ((o, v), q) in out.iter_mut().zip(src).zip(q) {
-                    *o = v - q;
+            Fixed::None => {}
+            Fixed::Plate(Px::F32(p)) => {
+                for (o, q) in row.iter_mut().zip(&p[a..b]) {
+                    *o -= q;
                 }
-                out
+            }
+            Fixed::Plate(Px::U8(p)) => {
+                for (o, &q) in row.iter_mut().zip(&p[a..b]) {
+                    *o -= super::image_io::unit(q);
+                }
             }
             Fixed::Texture(t) => {
                 let trow = t.row(y);
-                out.resize(src.len(), 0.0);
-                let sub = |o: &mut [f32], v: &[f32], tv: &[f32; 3]| {
-                    o[0] = v[0] - tv[0];
-                    o[1] = v[1] - tv[1];
-                    o[2] = v[2] - tv[2];
+                let sub = |o: &mut [f32], tv: &[f32; 3]| {
+                    o[0] -= tv[0];
+                    o[1] -= tv[1];
+                    o[2] -= tv[2];
                 };
                 // The pixels of a whole cell share its value: taken run by run, not looked up
                 // pixel by pixel (this loop was 6 % of a realistic folder's time). A run
@@ -157,19 +172,17 @@ impl Fixed<'_> {
                 let end = (whole * B).max(first);
                 for x in (x0..first).chain(end..x1) {
                     let k = 3 * (x - x0);
-                    sub(&mut out[k..k + 3], &src[k..k + 3], &trow[t.column(x)]);
+                    sub(&mut row[k..k + 3], &trow[t.column(x)]);
                 }
                 let (o, v) = (3 * (first - x0), 3 * (end - x0));
-                for ((o, v), tv) in out[o..v]
+                for (o, tv) in row[o..v]
                     .chunks_exact_mut(3 * B)
-                    .zip(src[o..v].chunks_exact(3 * B))
                     .zip(&trow[first / B..whole])
                 {
-                    for (o, v) in o.chunks_exact_mut(3).zip(v.chunks_exact(3)) {
-                        sub(o, v, tv);
+                    for o in o.chunks_exact_mut(3) {
+                        sub(o, tv);
                     }
                 }
-                out
             }
         }
     }
@@ -246,7 +259,7 @@ fn bilinear_in_tile(z: &[f32], cx: usize, cy: usize, fx: f32, fy: f32) -> f32 {
 struct Source<'s> {
     w: usize,
     h: usize,
-    rgb: &'s [f32],
+    rgb: Px<'s>,
     fixed: Fixed<'s>,
 }
 
@@ -297,7 +310,7 @@ impl Signal<'_> {
         Source {
             w: self.w,
             h: self.h,
-            rgb: &self.rgb,
+            rgb: self.rgb.view(),
             fixed: self.fixed,
         }
     }
@@ -314,7 +327,7 @@ impl Signal<'_> {
     fn sample_u(&self, x: f64, y: f64, u: [f32; 3]) -> Option<f32> {
         let (x0, y0, fx, fy) = bilinear_cell(x, y, self.w, self.h)?;
         let v = |x: usize, y: usize| {
-            let c = self.fixed.pixel(&self.rgb, self.w, x, y);
+            let c = self.fixed.pixel(self.rgb.view(), self.w, x, y);
             u[0] * c[0] + u[1] * c[1] + u[2] * c[2]
         };
         let a = v(x0, y0) + fx * (v(x0 + 1, y0) - v(x0, y0));
@@ -420,10 +433,9 @@ fn at_full_scale(p: &[f32]) -> bool {
 /// [`CoarsePhoto::saturated`], counted in the block-mean pass, is tested against.
 #[cfg(test)]
 fn saturated_fraction(img: &RgbImage) -> f64 {
-    let sat = img
-        .data
-        .chunks_exact(3)
-        .filter(|p| at_full_scale(p))
+    let s = img.samples();
+    let sat = (0..s.len() / 3)
+        .filter(|&i| at_full_scale(&[s.at(3 * i), s.at(3 * i + 1), s.at(3 * i + 2)]))
         .count();
     sat as f64 / (img.w * img.h) as f64
 }
@@ -450,22 +462,34 @@ pub(crate) fn block_means<const COUNT: bool, const N: usize>(
     img: &RgbImage,
     grids: [(Fixed, usize); N],
 ) -> ([BlockGrid; N], usize) {
-    let mut buf = Vec::with_capacity(3 * img.w);
+    let (mut plain_buf, mut buf) = (Vec::with_capacity(3 * img.w), Vec::with_capacity(3 * img.w));
     let mut out = grids.map(|(_, f)| {
         let (cw, ch) = (img.w / f, img.h / f);
         (cw, ch, vec![[0f32; 3]; cw * ch])
     });
     let mut sat = 0usize;
+    let px = img.samples();
     for y in 0..img.h {
+        // The row as `f32` once (converted from bytes, or borrowed), and each subtracted copy
+        // from it.
+        let plain = px.span(3 * y * img.w, 3 * (y + 1) * img.w, &mut plain_buf);
         for ((fixed, f), (cw, ch, sums)) in grids.iter().zip(out.iter_mut()) {
             let cy = y / f;
             if cy < *ch {
-                let row = fixed.row(&img.data, img.w, y, (0, img.w), &mut buf);
+                let row = match fixed {
+                    Fixed::None => plain,
+                    _ => {
+                        buf.clear();
+                        buf.extend_from_slice(plain);
+                        fixed.take_off(&mut buf, img.w, y, (0, img.w));
+                        &buf
+                    }
+                };
                 add_row(&mut sums[cy * *cw..(cy + 1) * *cw], row, *f);
             }
         }
         if COUNT {
-            sat += img.data[3 * y * img.w..3 * (y + 1) * img.w]
+            sat += plain
                 .chunks_exact(3)
                 .map(|p| usize::from(at_full_scale(p)))
                 .sum::<usize>();
@@ -1046,7 +1070,12 @@ pub fn build_from<'a>(
         Cloth::Plate(p) => {
             let d = residual_of(&c_img, &p.block_means(f));
             let s = ChannelSpread::of(&d);
-            ((d, s), None, Fixed::Plate(&p.img.data), ClothModel::Plate)
+            (
+                (d, s),
+                None,
+                Fixed::Plate(p.img.samples()),
+                ClothModel::Plate,
+            )
         }
         Cloth::Surface => (
             surface_residual(&c_img),
@@ -1131,7 +1160,7 @@ pub fn build_from<'a>(
     Ok(Signal {
         w: img.w,
         h: img.h,
-        rgb: img.data.as_slice().into(),
+        rgb: std::borrow::Cow::Borrowed(&img.data),
         fixed,
         f,
         cw,
@@ -1246,11 +1275,11 @@ mod tests {
     }
 
     /// A signal over full-resolution pixels `rgb` only (its coarse grid a single cell).
-    fn test_signal(w: usize, h: usize, rgb: Vec<f32>, fixed: super::Fixed) -> super::Signal {
+    fn test_signal(w: usize, h: usize, rgb: super::Samples, fixed: super::Fixed) -> super::Signal {
         super::Signal {
             w,
             h,
-            rgb: rgb.into(),
+            rgb: std::borrow::Cow::Owned(rgb),
             fixed,
             f: 1,
             cw: 1,
@@ -1278,7 +1307,7 @@ mod tests {
         let rgb: Vec<f32> = (0..w * h * 3)
             .map(|i| ((i * 7919) % 1013) as f32 / 1013.0 - 0.3)
             .collect();
-        let sig = test_signal(w, h, rgb, super::Fixed::None);
+        let sig = test_signal(w, h, super::Samples::F32(rgb), super::Fixed::None);
         let u = [0.9f32, -0.2, 0.35];
         let plane = sig.projected(u);
         let mut xs: Vec<f64> = vec![0.0, 0.25, 63.0, 63.5, 63.999, 64.0, 127.7, 128.0, 201.0];
@@ -1337,20 +1366,29 @@ mod tests {
     /// The cloth's fixed part taken off where pixels are read gives, to the bit, what a
     /// subtracted copy of the photo gives: block means, single pixels, projected tiles and the
     /// interleaved sampler, for a plate and for a texture map whose cells do not divide the
-    /// photo (its last row and column of cells reach the edge).
+    /// photo (its last row and column of cells reach the edge); photo and plate held as `f32`
+    /// or as kept 8-bit bytes.
     #[test]
     fn the_fixed_cloth_taken_off_on_reading_is_the_subtracted_copy() {
-        use super::super::image_io::RgbImage;
+        use super::super::image_io::{RgbImage, Samples};
         use super::super::texture::ClothTexture;
         use super::{Fixed, block_mean, block_mean_fixed};
         let (w, h) = (203, 131);
+        let n = 3 * w * h;
         let px = |i: usize, k: usize| ((i * k) % 1009) as f32 / 1009.0 - 0.2;
-        let img = RgbImage {
-            w,
-            h,
-            data: (0..3 * w * h).map(|i| px(i, 7919)).collect(),
-        };
-        let plate: Vec<f32> = (0..3 * w * h).map(|i| 0.5 * px(i, 104_729)).collect();
+        let byte = |i: usize, k: usize| ((i * k) % 256) as u8;
+        let photos = [
+            RgbImage::from_f32(w, h, (0..n).map(|i| px(i, 7919)).collect()),
+            RgbImage {
+                w,
+                h,
+                data: Samples::U8((0..n).map(|i| byte(i, 7919)).collect()),
+            },
+        ];
+        let plates = [
+            Samples::F32((0..n).map(|i| 0.5 * px(i, 104_729)).collect()),
+            Samples::U8((0..n).map(|i| byte(i, 104_729)).collect()),
+        ];
         let (tw, th) = (w / 2, h / 2);
         let tex = ClothTexture {
             w,
@@ -1363,88 +1401,89 @@ mod tests {
             coverage: 1.0,
             images: 8,
         };
-        let by_copy = |fixed: Fixed| -> Vec<f32> {
-            (0..h)
-                .flat_map(|y| (0..w).map(move |x| (x, y)))
-                .flat_map(|(x, y)| {
-                    let k = 3 * (y * w + x);
-                    let v = &img.data[k..k + 3];
-                    let m = match fixed {
-                        Fixed::None => [0.0; 3],
-                        Fixed::Plate(p) => [p[k], p[k + 1], p[k + 2]],
-                        Fixed::Texture(t) => {
-                            t.t[(y / 2).min(t.th - 1) * t.tw + (x / 2).min(t.tw - 1)]
-                        }
-                    };
-                    [v[0] - m[0], v[1] - m[1], v[2] - m[2]]
-                })
-                .collect()
-        };
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        for fixed in [Fixed::None, Fixed::Plate(&plate), Fixed::Texture(&tex)] {
-            let copy = RgbImage {
-                w,
-                h,
-                data: by_copy(fixed),
+        for img in &photos {
+            let v = img.samples();
+            let by_copy = |fixed: Fixed| -> Vec<f32> {
+                (0..h)
+                    .flat_map(|y| (0..w).map(move |x| (x, y)))
+                    .flat_map(|(x, y)| {
+                        let k = 3 * (y * w + x);
+                        let m = match fixed {
+                            Fixed::None => [0.0; 3],
+                            Fixed::Plate(p) => [p.at(k), p.at(k + 1), p.at(k + 2)],
+                            Fixed::Texture(t) => {
+                                t.t[(y / 2).min(t.th - 1) * t.tw + (x / 2).min(t.tw - 1)]
+                            }
+                        };
+                        [v.at(k) - m[0], v.at(k + 1) - m[1], v.at(k + 2) - m[2]]
+                    })
+                    .collect()
             };
-            for f in [2, 4, 5] {
-                let (a, b) = (block_mean_fixed(&img, fixed, f).2, block_mean(&copy, f).2);
-                assert_eq!(bits(a.as_flattened()), bits(b.as_flattened()), "f {f}");
-                // The same means from one pass that also sums the plain photo's.
-                let ([(_, _, plain), (_, _, both)], _) =
-                    super::block_means::<false, 2>(&img, [(Fixed::None, f), (fixed, f)]);
-                assert_eq!(bits(both.as_flattened()), bits(b.as_flattened()), "f {f}");
-                let alone = block_mean(&img, f).2;
-                assert_eq!(
-                    bits(plain.as_flattened()),
-                    bits(alone.as_flattened()),
-                    "f {f}"
-                );
-            }
-            for (x, y) in [(0, 0), (202, 130), (201, 129), (64, 65), (100, 7)] {
-                let k = 3 * (y * w + x);
-                assert_eq!(
-                    bits(&fixed.pixel(&img.data, w, x, y)),
-                    bits(&copy.data[k..k + 3])
-                );
-            }
-            // Runs of a row: whole texture cells, runs starting or ending inside a cell, the
-            // clamped last column (x = 202 of an odd width), empty and one-pixel runs.
-            let mut buf = Vec::new();
-            for (x0, x1) in [
-                (0, 203),
-                (1, 50),
-                (3, 4),
-                (7, 7),
-                (64, 129),
-                (200, 203),
-                (202, 203),
+            for fixed in [
+                Fixed::None,
+                Fixed::Plate(plates[0].view()),
+                Fixed::Plate(plates[1].view()),
+                Fixed::Texture(&tex),
             ] {
-                for y in [0, 64, 129, 130] {
-                    let row = fixed.row(&img.data, w, y, (x0, x1), &mut buf);
-                    let want = &copy.data[3 * (y * w + x0)..3 * (y * w + x1)];
-                    assert_eq!(bits(row), bits(want), "x {x0}..{x1} y {y}");
+                let copied = by_copy(fixed);
+                let copy = RgbImage::from_f32(w, h, copied.clone());
+                for f in [2, 4, 5] {
+                    let (a, b) = (block_mean_fixed(img, fixed, f).2, block_mean(&copy, f).2);
+                    assert_eq!(bits(a.as_flattened()), bits(b.as_flattened()), "f {f}");
+                    // The same means from one pass that also sums the plain photo's.
+                    let ([(_, _, plain), (_, _, both)], _) =
+                        super::block_means::<false, 2>(img, [(Fixed::None, f), (fixed, f)]);
+                    assert_eq!(bits(both.as_flattened()), bits(b.as_flattened()), "f {f}");
+                    let alone = block_mean(img, f).2;
+                    assert_eq!(
+                        bits(plain.as_flattened()),
+                        bits(alone.as_flattened()),
+                        "f {f}"
+                    );
                 }
-            }
-            let lazy = test_signal(w, h, img.data.clone(), fixed);
-            let copied = test_signal(w, h, copy.data.clone(), Fixed::None);
-            let u = [0.9f32, -0.2, 0.35];
-            let (pl, pc) = (lazy.projected(u), copied.projected(u));
-            for (x, y) in [
-                (0.0, 0.0),
-                (63.5, 64.2),
-                (64.0, 127.9),
-                (201.9, 129.9),
-                (150.3, 2.7),
-            ] {
-                assert_eq!(
-                    lazy.sample_u(x, y, u).map(f32::to_bits),
-                    copied.sample_u(x, y, u).map(f32::to_bits)
-                );
-                assert_eq!(
-                    pl.sample(x, y).map(f32::to_bits),
-                    pc.sample(x, y).map(f32::to_bits)
-                );
+                for (x, y) in [(0, 0), (202, 130), (201, 129), (64, 65), (100, 7)] {
+                    let k = 3 * (y * w + x);
+                    assert_eq!(bits(&fixed.pixel(v, w, x, y)), bits(&copied[k..k + 3]));
+                }
+                // Runs of a row: whole texture cells, runs starting or ending inside a cell,
+                // the clamped last column (x = 202 of an odd width), empty and one-pixel runs.
+                let mut buf = Vec::new();
+                for (x0, x1) in [
+                    (0, 203),
+                    (1, 50),
+                    (3, 4),
+                    (7, 7),
+                    (64, 129),
+                    (200, 203),
+                    (202, 203),
+                ] {
+                    for y in [0, 64, 129, 130] {
+                        let row = fixed.row(v, w, y, (x0, x1), &mut buf);
+                        let want = &copied[3 * (y * w + x0)..3 * (y * w + x1)];
+                        assert_eq!(bits(row), bits(want), "x {x0}..{x1} y {y}");
+                    }
+                }
+                let lazy = test_signal(w, h, img.data.clone(), fixed);
+                let copied = test_signal(w, h, copy.data.clone(), Fixed::None);
+                let u = [0.9f32, -0.2, 0.35];
+                let (pl, pc) = (lazy.projected(u), copied.projected(u));
+                for (x, y) in [
+                    (0.0, 0.0),
+                    (63.5, 64.2),
+                    (64.0, 127.9),
+                    (201.9, 129.9),
+                    (150.3, 2.7),
+                ] {
+                    assert_eq!(
+                        lazy.sample_u(x, y, u).map(f32::to_bits),
+                        copied.sample_u(x, y, u).map(f32::to_bits)
+                    );
+                    assert_eq!(
+                        pl.sample(x, y).map(f32::to_bits),
+                        pc.sample(x, y).map(f32::to_bits)
+                    );
+                }
             }
         }
     }
@@ -1462,7 +1501,8 @@ mod tests {
         let data = (0..h)
             .flat_map(|y| (0..w).flat_map(move |x| (0..3).map(move |c| val(x, y, c))))
             .collect();
-        let img = RgbImage { w, h, data };
+        let img = RgbImage::from_f32(w, h, data);
+        let v = img.samples();
         // The block sums as a plain loop, pixel by pixel into each block: block_mean adds in
         // the same order, so it must agree to the bit.
         let plain = |f: usize| {
@@ -1471,8 +1511,8 @@ mod tests {
             for y in 0..ch * f {
                 for x in 0..cw * f {
                     let o = &mut out[(y / f) * cw + x / f];
-                    for (c, v) in o.iter_mut().enumerate() {
-                        *v += img.data[3 * (y * w + x) + c];
+                    for (c, o_c) in o.iter_mut().enumerate() {
+                        *o_c += v.at(3 * (y * w + x) + c);
                     }
                 }
             }
@@ -1518,13 +1558,27 @@ mod tests {
             (202, 150, 0),
             (40, 150, 1),
         ];
+        let mut lit8 = RgbImage {
+            w,
+            h,
+            data: super::Samples::U8(vec![128; 3 * w * h]),
+        };
         for &(x, y, c) in &spots {
-            lit.data[3 * (y * w + x) + c] = 1.0;
+            lit.f32_mut()[3 * (y * w + x) + c] = 1.0;
+            if let super::Samples::U8(b) = &mut lit8.data {
+                b[3 * (y * w + x) + c] = 255;
+            }
         }
-        lit.data[3 * (60 * w + 60) + 2] = 254.0 / 255.0;
+        lit.f32_mut()[3 * (60 * w + 60) + 2] = 254.0 / 255.0;
+        if let super::Samples::U8(b) = &mut lit8.data {
+            b[3 * (60 * w + 60) + 2] = 254;
+        }
         let want = spots.len() as f64 / (w * h) as f64;
         assert_eq!(super::saturated_fraction(&lit).to_bits(), want.to_bits());
+        assert_eq!(super::saturated_fraction(&lit8).to_bits(), want.to_bits());
         for f in [1, 2, 4, 5] {
+            let ([_], n) = super::block_means::<true, 1>(&lit8, [(super::Fixed::None, f)]);
+            assert_eq!(n, spots.len(), "bytes, f {f}");
             let ([(_, _, m)], n) = super::block_means::<true, 1>(&lit, [(super::Fixed::None, f)]);
             assert_eq!(n, spots.len(), "f {f}");
             let plain_lit = super::block_mean(&lit, f).2;
@@ -1620,7 +1674,7 @@ mod tests {
                 }
             }
         }
-        let img = super::RgbImage { w, h, data };
+        let img = super::RgbImage::from_f32(w, h, data);
         let sig = super::build(&img, super::Cloth::Surface, 400).unwrap();
         for (xa, xb) in [(100.0, 700.0), (200.0, 600.0), (50.0, 350.0)] {
             let got = sig.illumination(xa, 120.0) / sig.illumination(xb, 380.0);

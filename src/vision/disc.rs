@@ -734,7 +734,7 @@ mod tests {
     use crate::vision::image_io::RgbImage as FloatImage;
 
     fn to_float(img: &image::RgbImage) -> FloatImage {
-        FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(img.clone()))
+        FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
     }
 
     /// `refine`'s radius error (px) on a rendered white resting ball of radius `r` centred at

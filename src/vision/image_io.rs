@@ -1,44 +1,159 @@
-//! Decoding photographs (JPEG, PNG, TIFF; 8 or 16 bit per channel) into RGB `f32` in `[0, 1]`.
+//! Decoding photographs (JPEG, PNG, TIFF; 8 or 16 bit per channel) into RGB in `[0, 1]`.
+//!
+//! An 8-bit photo (what JPEG and most PNG photos decode to) is kept as its decoder's bytes and
+//! converted where read, by [`unit`]; other depths are converted to `f32` once. Every reader
+//! goes through [`Px`], so both give the same `f32` values to the bit. A `f32` copy of a
+//! 2400×1600 photo is 46 MB written and read back whole by the block means, where the bytes are
+//! 11.5 MB already in memory (session 36: the conversion, its fresh pages and the page zeroing
+//! were some 8 % of a clean photo's time).
 
 use std::path::Path;
 
-/// An RGB image, interleaved, values in `[0, 1]`.
+/// An 8-bit sample as the photo's value in `[0, 1]`: `image`'s own conversion to the bit.
+#[inline(always)]
+pub fn unit(v: u8) -> f32 {
+    f32::from(v) / 255.0
+}
+
+/// A photo's samples, interleaved RGB, row by row.
+#[derive(Debug, Clone)]
+pub enum Samples {
+    /// 8-bit samples as decoded; each stands for [`unit`] of itself.
+    U8(Vec<u8>),
+    /// Samples in `[0, 1]` (16-bit photos, and photos changed after decoding).
+    F32(Vec<f32>),
+}
+
+impl Samples {
+    #[inline]
+    pub fn view(&self) -> Px<'_> {
+        match self {
+            Samples::U8(v) => Px::U8(v),
+            Samples::F32(v) => Px::F32(v),
+        }
+    }
+}
+
+/// A borrowed view of [`Samples`]: what the readers of a photo take.
+#[derive(Debug, Clone, Copy)]
+pub enum Px<'a> {
+    U8(&'a [u8]),
+    F32(&'a [f32]),
+}
+
+impl<'a> Px<'a> {
+    /// Sample `k` in `[0, 1]`.
+    #[inline(always)]
+    pub fn at(self, k: usize) -> f32 {
+        match self {
+            Px::U8(v) => unit(v[k]),
+            Px::F32(v) => v[k],
+        }
+    }
+
+    /// Number of samples (three per pixel).
+    pub fn len(self) -> usize {
+        match self {
+            Px::U8(v) => v.len(),
+            Px::F32(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.len() == 0
+    }
+
+    /// Samples `a..b` as `f32`: borrowed when they are `f32` already, else converted into
+    /// `out`.
+    #[inline]
+    pub fn span<'r>(self, a: usize, b: usize, out: &'r mut Vec<f32>) -> &'r [f32]
+    where
+        'a: 'r,
+    {
+        match self {
+            Px::F32(v) => &v[a..b],
+            Px::U8(_) => {
+                self.span_into(a, b, out);
+                out
+            }
+        }
+    }
+
+    /// Samples `a..b` as `f32`, into `out` (resized to hold them).
+    #[inline]
+    pub fn span_into(self, a: usize, b: usize, out: &mut Vec<f32>) {
+        out.clear();
+        match self {
+            Px::F32(v) => out.extend_from_slice(&v[a..b]),
+            Px::U8(v) => out.extend(v[a..b].iter().map(|&x| unit(x))),
+        }
+    }
+}
+
+/// An RGB image, interleaved, values in `[0, 1]` (see [`Samples`]).
 #[derive(Debug, Clone)]
 pub struct RgbImage {
     pub w: usize,
     pub h: usize,
-    pub data: Vec<f32>,
+    pub data: Samples,
 }
 
 impl RgbImage {
-    #[inline]
-    pub fn px(&self, x: usize, y: usize) -> [f32; 3] {
-        let i = 3 * (y * self.w + x);
-        [self.data[i], self.data[i + 1], self.data[i + 2]]
-    }
-
-    /// Converts a decoded image (any bit depth, grey or colour) to RGB `f32`.
-    ///
-    /// 8-bit RGB, what JPEG and most PNG photos decode to, is divided by 255 in one vectorised
-    /// pass: `image`'s own conversion to the bit, in a fifth of the time of its generic
-    /// per-pixel path (a 2400×1600 photo: some 20 ms of its 40 ms decode). A 256-entry table
-    /// of the same values took about as long (3.9 % against 3.5 % of eight clean photos'
-    /// time, session 35): both are bound by writing the 46 MB.
-    pub fn from_dynamic(img: &image::DynamicImage) -> Self {
-        if let image::DynamicImage::ImageRgb8(buf) = img {
-            return Self {
-                w: buf.width() as usize,
-                h: buf.height() as usize,
-                data: buf.as_raw().iter().map(|&v| f32::from(v) / 255.0).collect(),
-            };
-        }
-        let rgb = img.to_rgb32f();
-        let (w, h) = (rgb.width() as usize, rgb.height() as usize);
+    /// An image of `f32` samples.
+    pub fn from_f32(w: usize, h: usize, data: Vec<f32>) -> Self {
+        assert_eq!(
+            data.len(),
+            3 * w * h,
+            "{w}×{h} RGB needs {} samples",
+            3 * w * h
+        );
         Self {
             w,
             h,
-            data: rgb.into_raw(),
+            data: Samples::F32(data),
         }
+    }
+
+    /// The samples, for reading.
+    #[inline]
+    pub fn samples(&self) -> Px<'_> {
+        self.data.view()
+    }
+
+    #[inline]
+    pub fn px(&self, x: usize, y: usize) -> [f32; 3] {
+        let (i, s) = (3 * (y * self.w + x), self.samples());
+        [s.at(i), s.at(i + 1), s.at(i + 2)]
+    }
+
+    /// Bytes the samples take in memory.
+    pub fn byte_len(&self) -> usize {
+        match &self.data {
+            Samples::U8(v) => v.len(),
+            Samples::F32(v) => 4 * v.len(),
+        }
+    }
+
+    /// The samples as `f32`, for changing them (bytes are converted first, once).
+    pub fn f32_mut(&mut self) -> &mut Vec<f32> {
+        if let Samples::U8(v) = &self.data {
+            self.data = Samples::F32(v.iter().map(|&x| unit(x)).collect());
+        }
+        match &mut self.data {
+            Samples::F32(v) => v,
+            Samples::U8(_) => unreachable!("converted above"),
+        }
+    }
+
+    /// Takes a decoded image (any bit depth, grey or colour). 8-bit RGB keeps its decoder's
+    /// buffer, without a copy; anything else is converted to RGB `f32` by `image`.
+    pub fn from_dynamic(img: image::DynamicImage) -> Self {
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let data = match img {
+            image::DynamicImage::ImageRgb8(buf) => Samples::U8(buf.into_raw()),
+            other => Samples::F32(other.into_rgb32f().into_raw()),
+        };
+        Self { w, h, data }
     }
 }
 
@@ -47,7 +162,7 @@ pub const MIN_SIDE: usize = 32;
 
 /// Reads and decodes an image file; the error is a human-readable reason for the table.
 pub fn load(path: &Path) -> Result<RgbImage, String> {
-    convert(&decode(path)?)
+    convert(decode(path)?)
 }
 
 /// Reads and decodes an image file, as its decoder gives it (8 or 16 bits, grey or colour):
@@ -74,9 +189,9 @@ pub fn decode(path: &Path) -> Result<image::DynamicImage, String> {
         .map_err(|e| format!("corrupt or unsupported image: {e}"))
 }
 
-/// A decoded image as RGB `f32`, refused when too small to hold a shot: the second half of
-/// [`load`].
-pub fn convert(img: &image::DynamicImage) -> Result<RgbImage, String> {
+/// A decoded image as an [`RgbImage`], refused when too small to hold a shot: the second half
+/// of [`load`].
+pub fn convert(img: image::DynamicImage) -> Result<RgbImage, String> {
     let out = RgbImage::from_dynamic(img);
     if out.w < MIN_SIDE || out.h < MIN_SIDE {
         return Err(format!(
@@ -113,21 +228,53 @@ fn jpeg_is_complete(path: &Path) -> Result<bool, String> {
 mod tests {
     use super::*;
 
-    /// The 8-bit path gives `image`'s own conversion to the bit, for every value and channel.
+    /// Kept bytes read as `image`'s own conversion to `f32`, to the bit, for every value and
+    /// channel, whichever way they are read; the bytes are the decoder's, not a copy.
     #[test]
-    fn eight_bit_rgb_converts_as_image_does() {
+    fn eight_bit_rgb_reads_as_image_converts() {
         let raw: Vec<u8> = (0..=255u8).flat_map(|v| [v, 255 - v, v / 3]).collect();
         let buf = image::RgbImage::from_raw(16, 16, raw).unwrap();
         let dynamic = image::DynamicImage::ImageRgb8(buf);
-        let ours = RgbImage::from_dynamic(&dynamic);
-        let theirs = dynamic.into_rgb32f();
+        let theirs = dynamic.to_rgb32f().into_raw();
+        let ptr = dynamic.as_bytes().as_ptr();
+        let mut ours = RgbImage::from_dynamic(dynamic);
         assert_eq!((ours.w, ours.h), (16, 16));
-        let same = ours
-            .data
-            .iter()
-            .zip(theirs.as_raw())
-            .all(|(a, b)| a.to_bits() == b.to_bits());
-        assert!(same, "8-bit conversion differs from image's");
-        assert_eq!(ours.data[3 * 255].to_bits(), 1.0f32.to_bits());
+        let Samples::U8(bytes) = &ours.data else {
+            panic!("8-bit RGB is kept as bytes");
+        };
+        assert_eq!(bytes.as_ptr(), ptr, "the decoder's buffer, not a copy");
+        let s = ours.samples();
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let by_one: Vec<f32> = (0..s.len()).map(|k| s.at(k)).collect();
+        assert_eq!(bits(&by_one), bits(&theirs));
+        let mut buf = Vec::new();
+        assert_eq!(bits(s.span(3, 300, &mut buf)), bits(&theirs[3..300]));
+        assert_eq!(
+            ours.px(15, 15).map(f32::to_bits),
+            [0, 1, 2].map(|c| theirs[765 + c].to_bits())
+        );
+        assert_eq!(s.at(3 * 255).to_bits(), 1.0f32.to_bits());
+        assert_eq!(bits(ours.f32_mut()), bits(&theirs));
+        assert!(matches!(ours.data, Samples::F32(_)));
+    }
+
+    /// Other depths are converted once, as `image` converts them.
+    #[test]
+    fn sixteen_bit_rgb_is_converted_by_image() {
+        let raw: Vec<u16> = (0..48u16).map(|v| v * 1365).collect();
+        let buf = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(4, 4, raw).unwrap();
+        let dynamic = image::DynamicImage::ImageRgb16(buf);
+        let theirs = dynamic.to_rgb32f().into_raw();
+        let ours = RgbImage::from_dynamic(dynamic);
+        let Samples::F32(v) = &ours.data else {
+            panic!("16-bit is converted");
+        };
+        assert_eq!(v, &theirs);
+        let mut buf = Vec::new();
+        assert_eq!(
+            ours.samples().span(0, 48, &mut buf).as_ptr(),
+            v.as_ptr(),
+            "borrowed"
+        );
     }
 }

@@ -253,7 +253,7 @@ pub fn block_samples(
             if b >= n_blocks || excl.contains(x as f64, y as f64) {
                 continue;
             }
-            let c = sig.fixed.pixel(&sig.rgb, sig.w, x, y);
+            let c = sig.fixed.pixel(sig.rgb.view(), sig.w, x, y);
             let z = proj[0] * c[0] + proj[1] * c[1] + proj[2] * c[2];
             let c = &mut acc[b * n_bins + ((n + half) as usize).min(n_bins - 1)];
             c[0] += z as f64;
@@ -344,7 +344,7 @@ mod tests {
     const B: [f64; 2] = [560.0, 190.0];
 
     fn to_float(img: &image::RgbImage) -> FloatImage {
-        FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(img.clone()))
+        FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
     }
 
     /// Samples, the true line's point and direction.

@@ -9,7 +9,8 @@
 //! `R² - d²`). Both are symmetric about the centre-line, which is what the sub-pixel estimate uses.
 //!
 //! Stages (one module each):
-//! - [`image_io`]: decode JPEG/PNG/TIFF (8/16 bit) to linear-in-file RGB `f32`;
+//! - [`image_io`]: decode JPEG/PNG/TIFF (8/16 bit) to linear-in-file RGB in `[0, 1]` (8-bit
+//!   photos kept as bytes, read as `f32`);
 //! - [`background`]: cloth model (the `background` plate of `scene.toml`, or a robust polynomial
 //!   surface fitted to the photo itself, with the folder's fixed cloth texture from [`texture`]
 //!   when there is no plate), the ball-minus-cloth colour direction `u`, the projected signal

@@ -2958,7 +2958,7 @@ mod tests {
         let bd = Backdrop::plain(1200, 800, 1.0);
         let base = bd.base_plate();
         let to_float = |i: &image::RgbImage| {
-            FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(i.clone()))
+            FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(i.clone()))
         };
         let img = to_float(&render(&frame, &bd, &base, Some(7)));
         let plate = to_float(&render(&Frame::default(), &bd, &base, None));
@@ -3081,7 +3081,7 @@ mod tests {
         let sig = Signal {
             w: cw * f,
             h: ch * f,
-            rgb: vec![0.0; 3].into(),
+            rgb: std::borrow::Cow::Owned(crate::vision::image_io::Samples::F32(vec![0.0; 3])),
             fixed: background::Fixed::None,
             f,
             cw,
@@ -3262,7 +3262,7 @@ mod tests {
         };
         let base = bd.base_plate();
         let to_float = |i: &image::RgbImage| {
-            FloatImage::from_dynamic(&image::DynamicImage::ImageRgb8(i.clone()))
+            FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(i.clone()))
         };
         // Leaked so the signal may borrow them for the rest of the test.
         let imgs: &'static (FloatImage, crate::vision::Plate) = Box::leak(Box::new((

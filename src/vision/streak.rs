@@ -1514,7 +1514,7 @@ mod tests {
                 data[i + 2] = 0.15 + streak + disc;
             }
         }
-        let img = RgbImage { w, h, data };
+        let img = RgbImage::from_f32(w, h, data);
         let sig = background::build(&img, background::Cloth::Surface, 600).expect("signal");
         let ko = KeepOut {
             ox,

@@ -307,7 +307,7 @@ mod tests {
                 data.extend_from_slice(&[v, 0.8 * v, 0.5 * v]);
             }
         }
-        RgbImage { w, h, data }
+        RgbImage::from_f32(w, h, data)
     }
 
     #[test]
@@ -337,7 +337,7 @@ mod tests {
         // Subtracting it flattens a new photo's cloth to the gradient.
         let img = photo(9, w, h);
         let (x, y) = (250usize, 150usize);
-        let flat = super::super::background::Fixed::Texture(&tex).pixel(&img.data, w, x, y);
+        let flat = super::super::background::Fixed::Texture(&tex).pixel(img.samples(), w, x, y);
         let want = 0.3 + 0.1 * x as f64 / w as f64;
         assert!((flat[0] as f64 - want).abs() < 0.005);
     }
