@@ -543,6 +543,19 @@ const CUE_COLOUR_MIN: f64 = 0.94;
 /// and hard seed 303 shot_014 (−1.0). Refusing them declines those five and nothing else.
 const OBJECT_COLOUR_MIN: f64 = 0.9;
 
+/// Colour likeness (to the waiting disc) by which the streak read as the object ball's may fall
+/// short of the most disc-like streak before the colour counts against the reading. One ball
+/// paints its disc and its streak, yet the two differ in hue by up to this much: the right
+/// readings of [`OBJECT_COLOUR_MIN`]'s 45 tables lie at 0.917–1.0, the lowest a grey steel
+/// ball. Two balls of one colour (steel on steel) then differ by noise alone, and until
+/// session 36 any difference weighed 20 rad per unit of likeness against the geometry: fresh
+/// realistic seed 3601 shot_017 (steel, psi 19°), whose object ball's streak read 0.962 and the
+/// cue ball's incoming one 0.999, had its roles swapped (psi 18.4° off at a stated 0.21°; read
+/// right at 0.05 and at 0.08). Balls of different colours differ by far more (a white cue
+/// ball's streak against a yellow disc on green cloth about 0.75). On the 64 comparison tables
+/// the change alters only declined rows' reasons.
+const LIKENESS_TIE: f64 = 0.08;
+
 /// The cue ball's rolling direction `theta1` (degrees from `x̂`, in the mirrored frame) that a
 /// reading may give it. Its rolling velocity is `(5/7) v* + (2/7) R ω × z` after the impact:
 /// sideways `(5/7) v sin psi` in part (`v_y ≥ 0` by the mirror convention, less what friction
@@ -618,9 +631,10 @@ fn read_scene(
             for b1 in b1s {
                 let mut x0 = vec![o.0, o.1, r, alpha, psi_s];
                 // A cue ball and an object ball of different colours: the object ball's streak
-                // has the disc's colour (a white pair gives no preference).
+                // has the disc's colour (a pair of one colour gives no preference:
+                // [`LIKENESS_TIE`]).
                 let best_like = likeness.iter().cloned().fold(f64::MIN, f64::max);
-                let mut cost = t2.abs() + 20.0 * (best_like - likeness[b2]).max(0.0);
+                let mut cost = t2.abs() + 20.0 * (best_like - likeness[b2] - LIKENESS_TIE).max(0.0);
                 if let Some(b1) = b1 {
                     let Some((d1, t1, l0, l1)) = initial_path(&streaks[b1], p, alpha, r) else {
                         continue;
@@ -2863,6 +2877,73 @@ mod tests {
     use crate::synth::render::{Backdrop, Disc, Frame, Segment, render};
     use crate::vision::background;
     use crate::vision::image_io::RgbImage as FloatImage;
+
+    /// Two balls of one colour (steel on steel): the streaks' colour likenesses to the disc
+    /// differ by hue noise only, and the geometry picks the reading. Fresh realistic seed 3601
+    /// shot_017's layout: the cue ball arrives from the right at psi 19°, the object ball
+    /// leaves 5.6° off the line of centres, the drawn cue ball rolls off at 121°. Its object
+    /// ball's streak had the lowest likeness (0.962 against 0.999 and 1.0), which swapped the
+    /// object ball's and the incoming streaks until the likeness had a tie margin.
+    #[test]
+    fn one_colour_pairs_are_read_by_their_geometry() {
+        let (r, o) = (47.7, (1400.0, 900.0));
+        let rot = |d: (f64, f64), deg: f64| {
+            let (s, c) = deg.to_radians().sin_cos();
+            (c * d.0 - s * d.1, s * d.0 + c * d.1)
+        };
+        let d_in = (-1.0, 0.0);
+        let n = rot(d_in, -19.0);
+        let p = (o.0 - 2.0 * r * n.0, o.1 - 2.0 * r * n.1);
+        let along = |from: (f64, f64), d: (f64, f64), s0: f64, s1: f64| -> Vec<Sample> {
+            let k = ((s1 - s0) / 8.0) as usize;
+            (0..=k)
+                .map(|i| {
+                    let t = s0 + (s1 - s0) * i as f64 / k as f64;
+                    Sample {
+                        x: from.0 + t * d.0,
+                        y: from.1 + t * d.1,
+                        sigma: 0.3,
+                        amp: 0.05,
+                    }
+                })
+                .collect()
+        };
+        // Samples run from the disc outward: the incoming streak away from P, against `d_in`.
+        let incoming = along(p, (-d_in.0, -d_in.1), 2.0 * r, 14.0 * r);
+        let object = along(o, rot(n, -5.6), 1.5 * r, 14.0 * r);
+        // The drawn cue ball slides off at 80° and rolls on at 121°: its rolling line passes
+        // beside P.
+        let d80 = rot(n, 80.0);
+        let cue = along(
+            (p.0 + r * d80.0, p.1 + r * d80.1),
+            rot(n, 121.0),
+            r,
+            4.5 * r,
+        );
+        let streaks = vec![object, incoming, cue];
+        let steel = [0.64f32, 0.58, 0.50];
+        let norm = steel.iter().map(|v| v * v).sum::<f32>().sqrt();
+        let colours = [steel.map(|v| v / norm); 3];
+        let throw = (21.0f64 + THROW_READING_SLACK_DEG).to_radians();
+        let read = |likeness: &[f64]| {
+            read_scene(&streaks, likeness, &colours, o, r, false, throw).expect("a reading")
+        };
+        for likeness in [[0.962, 0.999, 1.0], [1.0, 1.0, 1.0], [0.93, 0.999, 0.98]] {
+            let rd = read(&likeness);
+            assert_eq!(
+                (rd.inc, rd.b1, rd.b2),
+                (1, Some(2), 0),
+                "likeness {likeness:?}"
+            );
+        }
+        // A cue ball of another colour than the object ball: the disc-coloured streak is the
+        // object ball's, whatever the geometry would prefer.
+        let rd = read(&[0.75, 1.0, 0.75]);
+        assert_eq!(
+            rd.b2, 1,
+            "the disc-coloured streak leaves as the object ball's"
+        );
+    }
 
     /// The throw bound is the impulse model's own: over impact angles, follow and draw and
     /// sidespin, in every regime the model picks, the object ball's rolling direction stays
