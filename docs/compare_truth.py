@@ -15,6 +15,8 @@ bench psi-bound` with the synth flags of DIR, since session 25), "bound" compare
 Cramér–Rao bound: the median |error| that a reader at the bound would have on every shot of
 the set and on the `ok` rows, and the medians over the `ok` rows of |error| / bound and stated
 sigma / bound (how many times the best possible sigma the extractor's errors and sigmas are).
+A set of several materials also gets one line per material: the ball radius in the photo, `ok`
+rows and the median |error| of psi, theta1, theta2 and delta1 (since session 36).
 """
 import csv
 import math
@@ -106,6 +108,20 @@ def report(folder, table):
         if worst:
             misread.append(f"{r['file']} ({worst[0]} {worst[1]:.1f} deg, {worst[2]:.0f} sigma)")
     print(f"  misread {len(misread)}" + (": " + ", ".join(misread) if misread else ""))
+    materials = sorted({t["material"] for t in truth.values()})
+    if len(materials) > 1:
+        for m in materials:
+            mine = [r for r in rows if truth[r["file"]]["material"] == m]
+            mine_ok = [r for r in mine if r["status"] == "ok"]
+            radius = statistics.median(float(truth[r["file"]]["ball_radius_px"]) for r in mine)
+            parts = []
+            for k in ["psi", "theta1", "theta2", "delta1"]:
+                errs = [angle_error(float(r[f"{k}_deg"]), float(truth[r["file"]][f"{k}_deg"]))
+                        for r in mine_ok
+                        if r[f"{k}_deg"] != "" and truth[r["file"]][f"{k}_deg"] != ""]
+                parts.append(f"{k} {statistics.median(errs):.3f} ({len(errs)})" if errs else f"{k} -")
+            print(f"  {m:8s} R {radius:5.1f} px  {len(mine_ok)}/{len(mine)} ok  median |error| "
+                  + "  ".join(parts))
 
 
 args = sys.argv[1:]
