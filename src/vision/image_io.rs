@@ -146,11 +146,16 @@ impl RgbImage {
     }
 
     /// Takes a decoded image (any bit depth, grey or colour). 8-bit RGB keeps its decoder's
-    /// buffer, without a copy; anything else is converted to RGB `f32` by `image`.
+    /// buffer, without a copy; 8-bit RGBA is made RGB bytes by `image` (alpha dropped: the
+    /// same values its `f32` conversion gives); anything else is converted to RGB `f32` by
+    /// `image` (grey among them: its conversion of a grey byte is not `unit`'s to the bit).
+    /// Whichever way, a photo reads the values `image` converts it to.
     pub fn from_dynamic(img: image::DynamicImage) -> Self {
+        use image::DynamicImage as D;
         let (w, h) = (img.width() as usize, img.height() as usize);
         let data = match img {
-            image::DynamicImage::ImageRgb8(buf) => Samples::U8(buf.into_raw()),
+            D::ImageRgb8(buf) => Samples::U8(buf.into_raw()),
+            D::ImageRgba8(_) => Samples::U8(img.into_rgb8().into_raw()),
             other => Samples::F32(other.into_rgb32f().into_raw()),
         };
         Self { w, h, data }
@@ -256,6 +261,37 @@ mod tests {
         assert_eq!(s.at(3 * 255).to_bits(), 1.0f32.to_bits());
         assert_eq!(bits(ours.f32_mut()), bits(&theirs));
         assert!(matches!(ours.data, Samples::F32(_)));
+    }
+
+    /// An 8-bit RGBA image is kept as RGB bytes that read as `image`'s `f32` conversion, to the
+    /// bit; a grey one, whose conversion differs from `unit` in the last bit for some values,
+    /// is converted by `image` and reads the same.
+    #[test]
+    fn other_eight_bit_layouts_read_as_image_converts() {
+        use image::{DynamicImage as D, ImageBuffer};
+        let v = |i: u32| ((i * 37 + 11) % 256) as u8;
+        let images = [
+            D::ImageRgba8(ImageBuffer::from_fn(16, 16, |x, y| {
+                let i = x + 16 * y;
+                image::Rgba([v(i), v(i + 1), v(i + 2), v(i + 3)])
+            })),
+            D::ImageLuma8(ImageBuffer::from_fn(16, 16, |x, y| {
+                image::Luma([v(x + 16 * y)])
+            })),
+            D::ImageLumaA8(ImageBuffer::from_fn(16, 16, |x, y| {
+                image::LumaA([v(x + 16 * y), v(3 * x + y)])
+            })),
+        ];
+        for (img, bytes) in images.into_iter().zip([true, false, false]) {
+            let kind = img.color();
+            let theirs = img.to_rgb32f().into_raw();
+            let ours = RgbImage::from_dynamic(img);
+            assert_eq!(matches!(ours.data, Samples::U8(_)), bytes, "{kind:?}");
+            let s = ours.samples();
+            assert_eq!(s.len(), theirs.len());
+            let bad = (0..s.len()).find(|&k| s.at(k).to_bits() != theirs[k].to_bits());
+            assert!(bad.is_none(), "{kind:?}: sample {bad:?} differs");
+        }
     }
 
     /// Other depths are converted once, as `image` converts them.
