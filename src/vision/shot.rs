@@ -553,7 +553,8 @@ const OBJECT_COLOUR_MIN: f64 = 0.9;
 /// cue ball's incoming one 0.999, had its roles swapped (psi 18.4° off at a stated 0.21°; read
 /// right at 0.05 and at 0.08). Balls of different colours differ by far more (a white cue
 /// ball's streak against a yellow disc on green cloth about 0.75). On the 64 comparison tables
-/// the change alters only declined rows' reasons.
+/// the change alters only declined rows' reasons; in the demo it reads one grazing steel shot
+/// (shot_024) as an ordinary scene instead of a crept ball, within a sigma either way.
 const LIKENESS_TIE: f64 = 0.08;
 
 /// The cue ball's rolling direction `theta1` (degrees from `x̂`, in the mirrored frame) that a
