@@ -1,7 +1,8 @@
 //! Decoding photographs (JPEG, PNG, TIFF; 8 or 16 bit per channel) into RGB in `[0, 1]`.
 //!
-//! An 8-bit photo (what JPEG and most PNG photos decode to) is kept as its decoder's bytes and
-//! converted where read, by [`unit`]; other depths are converted to `f32` once. Every reader
+//! An 8-bit colour photo (what JPEG and most PNG photos decode to) is kept as its decoder's
+//! bytes and converted where read, by [`unit`]; grey and 16-bit photos are converted to `f32`
+//! once. Every reader
 //! goes through [`Px`], so both give the same `f32` values to the bit. A `f32` copy of a
 //! 2400×1600 photo is 46 MB written and read back whole by the block means, where the bytes are
 //! 11.5 MB already in memory (session 36: the conversion, its fresh pages and the page zeroing
@@ -20,7 +21,7 @@ pub fn unit(v: u8) -> f32 {
 pub enum Samples {
     /// 8-bit samples as decoded; each stands for [`unit`] of itself.
     U8(Vec<u8>),
-    /// Samples in `[0, 1]` (16-bit photos, and photos changed after decoding).
+    /// Samples in `[0, 1]` (16-bit and grey photos, and photos changed after decoding).
     F32(Vec<f32>),
 }
 
@@ -165,14 +166,15 @@ impl RgbImage {
 /// Smallest image side that can hold a ball, a streak and a background.
 pub const MIN_SIDE: usize = 32;
 
-/// Reads and decodes an image file; the error is a human-readable reason for the table.
+/// Reads and decodes an image file, 8-bit photos kept as their bytes ([`Samples`]); the error
+/// is a human-readable reason for the table.
 pub fn load(path: &Path) -> Result<RgbImage, String> {
     convert(decode(path)?)
 }
 
 /// Reads and decodes an image file, as its decoder gives it (8 or 16 bits, grey or colour):
 /// the first half of [`load`].
-pub fn decode(path: &Path) -> Result<image::DynamicImage, String> {
+fn decode(path: &Path) -> Result<image::DynamicImage, String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read file: {e}"))?;
     if meta.len() == 0 {
         return Err("empty file (0 bytes)".into());
@@ -196,7 +198,7 @@ pub fn decode(path: &Path) -> Result<image::DynamicImage, String> {
 
 /// A decoded image as an [`RgbImage`], refused when too small to hold a shot: the second half
 /// of [`load`].
-pub fn convert(img: image::DynamicImage) -> Result<RgbImage, String> {
+fn convert(img: image::DynamicImage) -> Result<RgbImage, String> {
     let out = RgbImage::from_dynamic(img);
     if out.w < MIN_SIDE || out.h < MIN_SIDE {
         return Err(format!(
