@@ -2192,10 +2192,6 @@ mod tests {
         (frame, g)
     }
 
-    fn to_float(img: &image::RgbImage) -> FloatImage {
-        FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
-    }
-
     /// The arc fit on a rendering with sensor noise `a = b = noise` (seeded), against a
     /// noise-free plate.
     fn measure(frame: &Frame, g: &ArcGeometry, noise: f64, seed: Option<u64>) -> ArcFit {
@@ -2210,8 +2206,13 @@ mod tests {
         let bd = Backdrop::plain(520, 420, noise);
         let base = bd.base_plate();
         (
-            to_float(&render(frame, &bd, &base, seed)),
-            Plate::new(to_float(&render(&Frame::default(), &bd, &base, None))),
+            FloatImage::from(render(frame, &bd, &base, seed)),
+            Plate::new(FloatImage::from(render(
+                &Frame::default(),
+                &bd,
+                &base,
+                None,
+            ))),
         )
     }
 
@@ -2729,7 +2730,7 @@ mod tests {
             bd.texture = 0.03;
             bd.texture_seed = seed;
             let base = bd.base_plate();
-            let img = to_float(&render(&frame, &bd, &base, Some(seed)));
+            let img = FloatImage::from(render(&frame, &bd, &base, Some(seed)));
             let sig = background::build(&img, background::Cloth::Surface, 600).expect("signal");
             let a = fit(&sig, sig.u, &g).expect("arc fit");
             used += usize::from(a.highpass);
@@ -2778,9 +2779,13 @@ mod tests {
         for seed in 1..=3u64 {
             let bd = Backdrop::plain(520, 420, 0.05);
             let base = bd.base_plate();
-            let img = to_float(&render(&frame, &bd, &base, Some(seed)));
-            let plate = to_float(&render(&Frame::default(), &bd, &base, None));
-            let plate = Plate::new(plate);
+            let img = FloatImage::from(render(&frame, &bd, &base, Some(seed)));
+            let plate = Plate::new(FloatImage::from(render(
+                &Frame::default(),
+                &bd,
+                &base,
+                None,
+            )));
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
             match fit(&sig, sig.u, &g) {

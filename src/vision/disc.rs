@@ -733,10 +733,6 @@ mod tests {
     use crate::vision::background;
     use crate::vision::image_io::RgbImage as FloatImage;
 
-    fn to_float(img: &image::RgbImage) -> FloatImage {
-        FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
-    }
-
     /// `refine`'s radius error (px) on a rendered white resting ball of radius `r` centred at
     /// renderer coordinates `c`, under `light`, with sensor noise `noise` (seeded) against a
     /// noise-free plate.
@@ -760,9 +756,13 @@ mod tests {
             }],
         };
         let base = bd.base_plate();
-        let img = to_float(&render::render(&frame, &bd, &base, seed));
-        let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
-        let plate = crate::vision::Plate::new(plate);
+        let img = FloatImage::from(render::render(&frame, &bd, &base, seed));
+        let plate = crate::vision::Plate::new(FloatImage::from(render::render(
+            &Frame::default(),
+            &bd,
+            &base,
+            None,
+        )));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let coarse = CoarseDisc {
             cx: c.0 - 0.5 + 2.0,
@@ -849,9 +849,9 @@ mod tests {
             let mut bd = Backdrop::plain(520, 420, 1.0);
             bd.light = [-0.3, -0.4, 1.0];
             let base = bd.base_plate();
-            let img = to_float(&render::render(frame, &bd, &base, Some(5)));
-            let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
-            (img, plate)
+            let img = FloatImage::from(render::render(frame, &bd, &base, Some(5)));
+            let plate = FloatImage::from(render::render(&Frame::default(), &bd, &base, None));
+            (img, crate::vision::Plate::new(plate))
         };
         let start = |sig: &Signal, c: (f64, f64)| {
             let coarse = CoarseDisc {
@@ -868,7 +868,6 @@ mod tests {
             discs: vec![ball(w, 0.45), ball(q, 0.3)],
         };
         let (img, plate) = signal_of(&crept);
-        let plate = crate::vision::Plate::new(plate);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let true_dir = (q.1 - w.1).atan2(q.0 - w.0);
         for from in [w, q] {
@@ -908,7 +907,6 @@ mod tests {
             },
         ] {
             let (img, plate) = signal_of(&frame);
-            let plate = crate::vision::Plate::new(plate);
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
             let c = companion(&sig, &start(&sig, w));
@@ -945,9 +943,13 @@ mod tests {
         let mut bd = Backdrop::plain(600, 400, 0.3);
         bd.cloth_rgb = [0.16, 0.42, 0.24];
         let base = bd.base_plate();
-        let img = to_float(&render::render(&frame, &bd, &base, Some(7)));
-        let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
-        let plate = crate::vision::Plate::new(plate);
+        let img = FloatImage::from(render::render(&frame, &bd, &base, Some(7)));
+        let plate = crate::vision::Plate::new(FloatImage::from(render::render(
+            &Frame::default(),
+            &bd,
+            &base,
+            None,
+        )));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let cos = |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| f64::from(a[c] * b[c])).sum::<f64>();
         let on_red = mean_colour(&sig, (300.0, 60.0), 20.0).expect("red streak");

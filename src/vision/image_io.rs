@@ -155,11 +155,22 @@ impl RgbImage {
         use image::DynamicImage as D;
         let (w, h) = (img.width() as usize, img.height() as usize);
         let data = match img {
-            D::ImageRgb8(buf) => Samples::U8(buf.into_raw()),
+            D::ImageRgb8(buf) => return buf.into(),
             D::ImageRgba8(_) => Samples::U8(img.into_rgb8().into_raw()),
             other => Samples::F32(other.into_rgb32f().into_raw()),
         };
         Self { w, h, data }
+    }
+}
+
+/// An 8-bit RGB buffer (a decoder's, or a rendering's) kept as it is, without a copy.
+impl From<image::RgbImage> for RgbImage {
+    fn from(buf: image::RgbImage) -> Self {
+        Self {
+            w: buf.width() as usize,
+            h: buf.height() as usize,
+            data: Samples::U8(buf.into_raw()),
+        }
     }
 }
 

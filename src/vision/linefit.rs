@@ -343,10 +343,6 @@ mod tests {
     const A: [f64; 2] = [40.0, 150.0];
     const B: [f64; 2] = [560.0, 190.0];
 
-    fn to_float(img: &image::RgbImage) -> FloatImage {
-        FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(img.clone()))
-    }
-
     /// Samples, the true line's point and direction.
     type Read = (Option<Vec<Sample>>, (f64, f64), (f64, f64));
 
@@ -374,9 +370,13 @@ mod tests {
             }],
         };
         let base = bd.base_plate();
-        let img = to_float(&render::render(&frame, &bd, &base, Some(seed)));
-        let plate = to_float(&render::render(&Frame::default(), &bd, &base, None));
-        let plate = crate::vision::Plate::new(plate);
+        let img = FloatImage::from(render::render(&frame, &bd, &base, Some(seed)));
+        let plate = crate::vision::Plate::new(FloatImage::from(render::render(
+            &Frame::default(),
+            &bd,
+            &base,
+            None,
+        )));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let p = (A[0] - 0.5, A[1] - 0.5);
         let l = (B[0] - A[0]).hypot(B[1] - A[1]);

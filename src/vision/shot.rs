@@ -3039,16 +3039,17 @@ mod tests {
         };
         let bd = Backdrop::plain(1200, 800, 1.0);
         let base = bd.base_plate();
-        let to_float = |i: &image::RgbImage| {
-            FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(i.clone()))
-        };
-        let img = to_float(&render(&frame, &bd, &base, Some(7)));
-        let plate = to_float(&render(&Frame::default(), &bd, &base, None));
+        let img = FloatImage::from(render(&frame, &bd, &base, Some(7)));
+        let plate = crate::vision::Plate::new(FloatImage::from(render(
+            &Frame::default(),
+            &bd,
+            &base,
+            None,
+        )));
         let opts = AnalysisOptions {
             ball_friction_max: friction,
             ..AnalysisOptions::default()
         };
-        let plate = crate::vision::Plate::new(plate);
         analyse(&img, Cloth::Plate(&plate), Some(r), &opts)
     }
 
@@ -3343,13 +3344,15 @@ mod tests {
             discs,
         };
         let base = bd.base_plate();
-        let to_float = |i: &image::RgbImage| {
-            FloatImage::from_dynamic(image::DynamicImage::ImageRgb8(i.clone()))
-        };
         // Leaked so the signal may borrow them for the rest of the test.
         let imgs: &'static (FloatImage, crate::vision::Plate) = Box::leak(Box::new((
-            to_float(&render(&frame, &bd, &base, None)),
-            crate::vision::Plate::new(to_float(&render(&Frame::default(), &bd, &base, None))),
+            FloatImage::from(render(&frame, &bd, &base, None)),
+            crate::vision::Plate::new(FloatImage::from(render(
+                &Frame::default(),
+                &bd,
+                &base,
+                None,
+            ))),
         )));
         background::build(&imgs.0, background::Cloth::Plate(&imgs.1), 600).expect("signal")
     }
