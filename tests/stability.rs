@@ -290,11 +290,13 @@ mod extraction {
     }
 
     fn add_disc(img: &mut RgbImage, cx: f64, cy: f64, r: f64, colour: [f32; 3]) {
-        for y in 0..img.h {
-            for x in 0..img.w {
+        let (w, h) = (img.w, img.h);
+        let data = img.f32_mut();
+        for y in 0..h {
+            for x in 0..w {
                 if (x as f64 + 0.5 - cx).hypot(y as f64 + 0.5 - cy) < r {
-                    let i = 3 * (y * img.w + x);
-                    img.f32_mut()[i..i + 3].copy_from_slice(&colour);
+                    let i = 3 * (y * w + x);
+                    data[i..i + 3].copy_from_slice(&colour);
                 }
             }
         }
@@ -415,15 +417,16 @@ mod extraction {
         let mut img = image_io::load(&png).unwrap();
         // A faint straight streak of a third ball across the whole photo, one ball wide.
         let r: f64 = truth["ball_radius_px"].parse().unwrap();
-        let (w, h) = (img.w as f64, img.h as f64);
-        for y in 0..img.h {
-            for x in 0..img.w {
+        let (iw, ih) = (img.w, img.h);
+        let (w, h) = (iw as f64, ih as f64);
+        let data = img.f32_mut();
+        for y in 0..ih {
+            for x in 0..iw {
                 let dist = ((x as f64 - 0.15 * w) * 0.6 - (y as f64 - 0.0 * h) * 0.8).abs();
                 if dist < r {
-                    let i = 3 * (y * img.w + x);
+                    let i = 3 * (y * iw + x);
                     let f = 0.04 * (1.0 - (dist / r).powi(2)).sqrt() as f32;
-                    for c in 0..3 {
-                        let v = &mut img.f32_mut()[i + c];
+                    for v in &mut data[i..i + 3] {
                         *v += f * (0.9 - *v);
                     }
                 }

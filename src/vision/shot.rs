@@ -584,6 +584,8 @@ fn read_scene(
     // The lowest colour likeness of a streak that leaves the disc as the object ball's would
     // but is refused for its colour ([`OBJECT_COLOUR_MIN`]), for the reason when nothing reads.
     let mut refused_colour: Option<f64> = None;
+    // The most disc-like streak's colour likeness, against which each object streak's is held.
+    let best_like = likeness.iter().cloned().fold(f64::MIN, f64::max);
     for inc in 0..k {
         let Some((p, alpha, psi_s)) = lines[inc].and_then(|li| impact_from_incoming(&li, o, r))
         else {
@@ -634,7 +636,6 @@ fn read_scene(
                 // A cue ball and an object ball of different colours: the object ball's streak
                 // has the disc's colour (a pair of one colour gives no preference:
                 // [`LIKENESS_TIE`]).
-                let best_like = likeness.iter().cloned().fold(f64::MIN, f64::max);
                 let mut cost = t2.abs() + 20.0 * (best_like - likeness[b2] - LIKENESS_TIE).max(0.0);
                 if let Some(b1) = b1 {
                     let Some((d1, t1, l0, l1)) = initial_path(&streaks[b1], p, alpha, r) else {
