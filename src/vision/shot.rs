@@ -2479,15 +2479,16 @@ fn read_body(
         let without_path = !cue_at_rest || rest_oblique;
         // The object ball's streak light against the incoming one's ([`HIDDEN_PATH_LIGHT_MIN`]).
         let light_ratio = median_amp(&measured[reading.b2]) / median_amp(&measured[reading.inc]);
-        let story = if !cue_at_rest {
-            "only two streaks and no ball at rest at the impact point"
+        let (story, psi_sd_max) = if cue_at_rest {
+            (
+                "a ball rests near the impact point at an oblique impact",
+                REST_OBLIQUE_PSI_SD_MAX_DEG,
+            )
         } else {
-            "a ball rests near the impact point at an oblique impact"
-        };
-        let psi_sd_max = if cue_at_rest {
-            REST_OBLIQUE_PSI_SD_MAX_DEG
-        } else {
-            HIDDEN_PATH_PSI_SD_MAX_DEG
+            (
+                "only two streaks and no ball at rest at the impact point",
+                HIDDEN_PATH_PSI_SD_MAX_DEG,
+            )
         };
         let refuse = if cue_at_rest && psi_deg > REST_NEAR_P_PSI_MAX_DEG {
             Some(format!(
