@@ -1283,6 +1283,34 @@ fn a_reading_without_the_cue_balls_path_needs_psi_within_a_quarter_degree() {
 }
 
 #[test]
+fn a_disc_crossed_by_the_cue_balls_path_is_read_from_its_rims_circle() {
+    // Near head-on realistic seed 3706's shot_024 (billiard, psi 11.96°, a follow shot): the
+    // white cue ball rolls on over a third of the blue object ball's waiting place, on blue
+    // cloth. The circle of every edge of that disc is 3.7 px off with its radius 6.7 px short,
+    // and until session 37 the shot read `ok` at psi 13.74° ± 0.31° and theta2 2.72° for
+    // 0.83°. The consensus of the rim's edges lies 11 px from it and reads psi 12.2° ± 0.20°.
+    let (r, t) = one_of_24_with(
+        "rim_circle",
+        "realistic",
+        3706,
+        NEAR_HEAD_ON_MIXED,
+        "shot_024.jpg",
+    );
+    assert!(
+        (t[&r.file]["psi_deg"].parse::<f64>().unwrap() - 11.96).abs() < 0.01,
+        "{:?}",
+        t[&r.file]
+    );
+    assert_ok_within_3_sigma(&r, &t, &["psi", "theta2"]);
+    assert!(
+        r.reason
+            .starts_with("read from the circle of the object ball's rim alone"),
+        "{}",
+        r.reason
+    );
+}
+
+#[test]
 fn a_swapped_reading_of_two_resting_balls_must_beat_the_first_ones_time_arrow() {
     // Near head-on realistic seed 919's shot_020 (rubber, psi 4.05°, a draw shot): a white cue
     // ball drawn back to rest against the red object ball's disc. The first reading (right
