@@ -2204,16 +2204,7 @@ mod tests {
     /// (seeded), and its noise-free plate.
     fn rendering(frame: &Frame, noise: f64, seed: Option<u64>) -> (FloatImage, Plate) {
         let bd = Backdrop::plain(520, 420, noise);
-        let base = bd.base_plate();
-        (
-            FloatImage::from(render(frame, &bd, &base, seed)),
-            Plate::new(FloatImage::from(render(
-                &Frame::default(),
-                &bd,
-                &base,
-                None,
-            ))),
-        )
+        crate::vision::rendered_with_plate(frame, &bd, seed)
     }
 
     /// The closed-form gradients of `piece` at pixel `q` next to central differences of its
@@ -2778,14 +2769,7 @@ mod tests {
         let (frame, g) = scene(delta, theta, 0.12 * R, 0.2 * R);
         for seed in 1..=3u64 {
             let bd = Backdrop::plain(520, 420, 0.05);
-            let base = bd.base_plate();
-            let img = FloatImage::from(render(&frame, &bd, &base, Some(seed)));
-            let plate = Plate::new(FloatImage::from(render(
-                &Frame::default(),
-                &bd,
-                &base,
-                None,
-            )));
+            let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, Some(seed));
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
             match fit(&sig, sig.u, &g) {

@@ -491,13 +491,8 @@ fn trimmed_circle(mut pts: Vec<(f64, f64)>) -> Option<EdgeCircle> {
 /// run of them together: the radius's error is the scatter of the means of blocks of rays (each
 /// wider than that correlation) over their number, and never less than the rays' scatter over
 /// theirs.
-fn edge_sd(
-    &EdgeCircle {
-        c: fit,
-        ref pts,
-        sr,
-    }: &EdgeCircle,
-) -> f64 {
+fn edge_sd(e: &EdgeCircle) -> f64 {
+    let (fit, pts, sr) = (e.c, &e.pts, e.sr);
     let res: Vec<f64> = pts
         .iter()
         .map(|p| ((p.0 - fit.0).hypot(p.1 - fit.1)) - fit.2)
@@ -941,7 +936,6 @@ mod tests {
     use super::*;
     use crate::synth::render::{self, Backdrop, Frame};
     use crate::vision::background;
-    use crate::vision::image_io::RgbImage as FloatImage;
 
     /// `refine`'s radius error (px) on a rendered white resting ball of radius `r` centred at
     /// renderer coordinates `c`, under `light`, with sensor noise `noise` (seeded) against a
@@ -965,14 +959,7 @@ mod tests {
                 specular: 0.3,
             }],
         };
-        let base = bd.base_plate();
-        let img = FloatImage::from(render::render(&frame, &bd, &base, seed));
-        let plate = crate::vision::Plate::new(FloatImage::from(render::render(
-            &Frame::default(),
-            &bd,
-            &base,
-            None,
-        )));
+        let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, seed);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let coarse = CoarseDisc {
             cx: c.0 - 0.5 + 2.0,
@@ -1058,10 +1045,7 @@ mod tests {
         let signal_of = |frame: &Frame| {
             let mut bd = Backdrop::plain(520, 420, 1.0);
             bd.light = [-0.3, -0.4, 1.0];
-            let base = bd.base_plate();
-            let img = FloatImage::from(render::render(frame, &bd, &base, Some(5)));
-            let plate = FloatImage::from(render::render(&Frame::default(), &bd, &base, None));
-            (img, crate::vision::Plate::new(plate))
+            crate::vision::rendered_with_plate(frame, &bd, Some(5))
         };
         let start = |sig: &Signal, c: (f64, f64)| {
             let coarse = CoarseDisc {
@@ -1152,14 +1136,7 @@ mod tests {
         };
         let mut bd = Backdrop::plain(600, 400, 0.3);
         bd.cloth_rgb = [0.16, 0.42, 0.24];
-        let base = bd.base_plate();
-        let img = FloatImage::from(render::render(&frame, &bd, &base, Some(7)));
-        let plate = crate::vision::Plate::new(FloatImage::from(render::render(
-            &Frame::default(),
-            &bd,
-            &base,
-            None,
-        )));
+        let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, Some(7));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let cos = |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| f64::from(a[c] * b[c])).sum::<f64>();
         let on_red = mean_colour(&sig, (300.0, 60.0), 20.0).expect("red streak");
@@ -1210,14 +1187,7 @@ mod tests {
             };
             let mut bd = Backdrop::plain(420, 420, 1.0);
             bd.cloth_rgb = cloth;
-            let base = bd.base_plate();
-            let img = FloatImage::from(render::render(&frame, &bd, &base, Some(3)));
-            let plate = crate::vision::Plate::new(FloatImage::from(render::render(
-                &Frame::default(),
-                &bd,
-                &base,
-                None,
-            )));
+            let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, Some(3));
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
             let coarse = CoarseDisc {

@@ -336,7 +336,6 @@ mod tests {
     use super::*;
     use crate::synth::render::{self, Backdrop, Frame, Segment};
     use crate::vision::background;
-    use crate::vision::image_io::RgbImage as FloatImage;
 
     const R: f64 = 30.0;
     /// The streak's ends in renderer coordinates (pixel centres at half-integers).
@@ -369,14 +368,7 @@ mod tests {
                 specular: 0.3,
             }],
         };
-        let base = bd.base_plate();
-        let img = FloatImage::from(render::render(&frame, &bd, &base, Some(seed)));
-        let plate = crate::vision::Plate::new(FloatImage::from(render::render(
-            &Frame::default(),
-            &bd,
-            &base,
-            None,
-        )));
+        let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, Some(seed));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
         let p = (A[0] - 0.5, A[1] - 0.5);
         let l = (B[0] - A[0]).hypot(B[1] - A[1]);

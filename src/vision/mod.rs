@@ -16,7 +16,7 @@
 //!   when there is no plate), the ball-minus-cloth colour direction `u`, the projected signal
 //!   `S = u·(I - B)` and its MAD noise;
 //! - [`disc`]: the object ball's waiting disc, centre `O` and radius `R` from a circle fit to
-//!   sub-pixel edge points;
+//!   sub-pixel edge points (and the edges' consensus circle where a run of them strays);
 //! - [`streak`]: coarse streak detection on a downsampled signal, then full-resolution tracking of
 //!   each streak's centre-line by symmetric centroids of baseline-subtracted cross-profiles;
 //! - [`linefit`]: the incoming streak re-measured from its pixels in blocks one radius long
@@ -57,4 +57,24 @@ pub mod streak;
 pub mod texture;
 
 pub use background::{Cloth, ClothModel, Plate};
+
+/// A test frame rendered on `bd` (sensor noise from `seed`, none for `None`) and the noise-free
+/// plate of the same table: what the vision modules' unit tests build their signal from.
+#[cfg(test)]
+pub(crate) fn rendered_with_plate(
+    frame: &crate::synth::render::Frame,
+    bd: &crate::synth::render::Backdrop,
+    seed: Option<u64>,
+) -> (image_io::RgbImage, Plate) {
+    use crate::synth::render::{Frame, render};
+    let base = bd.base_plate();
+    let img = image_io::RgbImage::from(render(frame, bd, &base, seed));
+    let plate = Plate::new(image_io::RgbImage::from(render(
+        &Frame::default(),
+        bd,
+        &base,
+        None,
+    )));
+    (img, plate)
+}
 pub use shot::{Analysis, AnalysisOptions, PathModels, analyse};

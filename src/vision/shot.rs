@@ -18,7 +18,9 @@
 //! its path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
 //! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where no
 //! disc shows along the photo's mean ball colour (a dark ball on a light cloth), discs of every
-//! colour are read on their own colour, kept only with all three paths.
+//! colour are read on their own colour, kept only with all three paths. A disc whose edges
+//! disagree (a streak across it: [`disc::Disc::rim`]) is read from both its circles and the shot
+//! kept only where they agree or the rim's circle reads it ([`checked_by_rim`]).
 //!
 //! A straight path (`line`) states no start tangent: its `delta` is unresolved with the reason
 //! (the cue ball's may still come from the arc fit of the light at `P`, [`arc`]).
@@ -1629,16 +1631,15 @@ fn read_candidates(
 /// rim lies more than a pixel from the circle of every edge) checked by reading the shot from
 /// the rim's circle too. A streak across the disc or a limb of the cloth's colour moves a run of
 /// edges 4–20 px, and the circle of every edge is then off by several pixels at a stated error
-/// of 0.2–1 px. Where both read psi within 3 sigma of each other (combined) the first reading
-/// stands; where both read but differ, the rim's reading (its circle was the nearer to the
-/// truth on 14 of 15 such object discs); where the rim's circle reads nothing, neither is
-/// trusted and the shot is declined. A crept object ball's reading is not checked: its rest disc
-/// and the band it swept are the run of edges (two such right readings, clean seed 404 shot_023
-/// and hard 303 shot_005, were declined when it was). Measured (session 38, 100 synthetic sets,
-/// 2,412 photos):
-/// read from the rim's circle alone instead, the low-contrast discs of grazing shots and the
-/// resting cue balls of near head-on shots gave 10 new misreadings, because the circle of every
-/// edge had kept those shots from being read.
+/// of 0.2–1 px. Where both read psi within [`RIM_AGREE_SIGMAS`] combined sigmas of each other
+/// the first reading stands; where both read but differ, the rim's reading (its circle was the
+/// nearer to the truth on 14 of 15 such object discs); where the rim's circle reads nothing,
+/// neither is trusted and the shot is declined. A crept object ball's reading is not checked
+/// ([`read_candidates`]): its rest disc and the band it swept are the run of edges (two such
+/// right readings, clean seed 404 shot_023 and hard 303 shot_005, were declined when it was).
+/// Read from the rim's circle alone instead (session 38, 100 synthetic sets, 2,412 photos), the
+/// low-contrast discs of grazing shots and the resting cue balls of near head-on shots gave 10
+/// new misreadings: the circle of every edge had kept those shots from being read.
 fn checked_by_rim(
     sig: &Signal,
     mut a: Analysis,
