@@ -961,15 +961,20 @@ mod tests {
         };
         let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, seed);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
-        let coarse = CoarseDisc {
+        let d = refine(&sig, &coarse_start(c, r)).expect("disc");
+        (d.r - r, d)
+    }
+
+    /// A coarse disc 2.5 px from the true centre `c` (renderer coordinates, pixel centres at
+    /// half-integers) with its radius 3 px short of `r`: where [`refine`] starts in the tests.
+    fn coarse_start(c: (f64, f64), r: f64) -> CoarseDisc {
+        CoarseDisc {
             cx: c.0 - 0.5 + 2.0,
             cy: c.1 - 0.5 - 1.5,
             r: r - 3.0,
             level: 0.0,
             elongation: 1.0,
-        };
-        let d = refine(&sig, &coarse).expect("disc");
-        (d.r - r, d)
+        }
     }
 
     /// Lights straight above and oblique (the synthetic tiers draw `x, y ∈ [−0.4, 0.4]`).
@@ -1190,14 +1195,7 @@ mod tests {
             let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, Some(3));
             let sig =
                 background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
-            let coarse = CoarseDisc {
-                cx: o.0 - 0.5 + 2.0,
-                cy: o.1 - 0.5 - 1.5,
-                r: r - 3.0,
-                level: 0.0,
-                elongation: 1.0,
-            };
-            refine(&sig, &coarse).expect("disc")
+            refine(&sig, &coarse_start(o, r)).expect("disc")
         };
         let off = |d: &Disc| (d.cx - (o.0 - 0.5)).hypot(d.cy - (o.1 - 0.5));
         for segments in [vec![streak], vec![]] {
