@@ -437,16 +437,6 @@ fn rim_points(points: &[(f64, f64)], r: f64) -> Option<Vec<(f64, f64)>> {
         .filter(|p| residual(c, p).abs() < band)
         .copied()
         .collect();
-    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
-        eprintln!(
-            "disc rim: {} of {} edges within {band:.2} px of ({:.2},{:.2}) r {:.2}",
-            kept.len(),
-            n,
-            c.0,
-            c.1,
-            c.2
-        );
-    }
     (kept.len() >= 8).then_some(kept)
 }
 
@@ -456,6 +446,23 @@ struct EdgeCircle {
     c: (f64, f64, f64),
     pts: Vec<(f64, f64)>,
     sr: f64,
+}
+
+impl EdgeCircle {
+    /// The disc of this circle, its radius's standard error `sd` (the centre's is `sd √2`) and
+    /// its edge contrast.
+    fn into_disc(self, sd: f64, contrast: f32) -> Disc {
+        Disc {
+            cx: self.c.0,
+            cy: self.c.1,
+            r: self.c.2,
+            sigma_c: sd * 2f64.sqrt(),
+            sigma_r: sd,
+            contrast: contrast as f64,
+            edge_points: self.pts,
+            rim: None,
+        }
+    }
 }
 
 /// [`kasa`]'s circle on `pts`, then three rounds of keeping the points within 3.5 times the
@@ -604,8 +611,7 @@ pub fn refine_excluding(
             None
         };
         let all = trimmed_circle(pts).ok_or("disc edge fit failed")?;
-        let sd_r = edge_sd(&all);
-        let EdgeCircle { c: fit, pts, .. } = all;
+        let (fit, sd_r) = (all.c, edge_sd(&all));
         if let Some(rim) = rim {
             let d_c = (rim.c.0 - fit.0).hypot(rim.c.1 - fit.1);
             if std::env::var_os("STREAKFIT_DEBUG").is_some() {
@@ -627,16 +633,7 @@ pub fn refine_excluding(
             }
         }
         (cx, cy, r) = fit;
-        result = Some(Disc {
-            cx,
-            cy,
-            r,
-            sigma_c: sd_r * 2f64.sqrt(),
-            sigma_r: sd_r,
-            contrast: md as f64,
-            rim: None,
-            edge_points: pts,
-        });
+        result = Some(all.into_disc(sd_r, md));
     }
     let mut disc = result.ok_or("disc fit failed")?;
     // Where a pass's edges disagreed (a run of them moved by a streak across the disc or a limb
@@ -658,16 +655,7 @@ pub fn refine_excluding(
             // Its scatter leaves out that the edges disagreed: its error is at least the
             // disc's.
             let sd = edge_sd(&rim).max(disc.sigma_r);
-            disc.rim = Some(Box::new(Disc {
-                cx: rim.c.0,
-                cy: rim.c.1,
-                r: rim.c.2,
-                sigma_c: sd * 2f64.sqrt(),
-                sigma_r: sd,
-                contrast: md as f64,
-                rim: None,
-                edge_points: rim.pts,
-            }));
+            disc.rim = Some(Box::new(rim.into_disc(sd, md)));
         }
     }
     Ok(disc)

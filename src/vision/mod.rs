@@ -57,6 +57,7 @@ pub mod streak;
 pub mod texture;
 
 pub use background::{Cloth, ClothModel, Plate};
+pub use shot::{Analysis, AnalysisOptions, PathModels, analyse};
 
 /// A test frame rendered on `bd` (sensor noise from `seed`, none for `None`) and the noise-free
 /// plate of the same table: what the vision modules' unit tests build their signal from.
@@ -77,4 +78,3 @@ pub(crate) fn rendered_with_plate(
     )));
     (img, plate)
 }
-pub use shot::{Analysis, AnalysisOptions, PathModels, analyse};

@@ -1648,7 +1648,7 @@ fn checked_by_rim(
     opts: &AnalysisOptions,
     scene_radius_px: Option<f64>,
 ) -> Analysis {
-    let b = within_scale(
+    let mut b = within_scale(
         deflected(read_from_disc(sig, rim.clone(), opts, None)),
         scene_radius_px,
     );
@@ -1664,7 +1664,6 @@ fn checked_by_rim(
             if (pa - pb).abs() <= RIM_AGREE_SIGMAS * sa.hypot(sb) {
                 return a;
             }
-            let mut b = b;
             let note = format!(
                 "read from the circle of the object ball's rim alone (its disc has a run of \
                  edges off the circle of every edge, {apart:.1} px away, from which psi reads \
