@@ -10,9 +10,9 @@
 //! one with the smallest `|theta2|` wins; if the runner-up is about as good, the photo is declined
 //! (cannot tell which ball is which). Two streaks only: the cue ball stopped at the impact if a
 //! stationary disc sits at `P` (then `delta1`, `theta1` are undefined; which of the two touching
-//! resting balls is the object ball only the object ball's slowing down tells, [`time_arrow`], and
-//! a reading whose arrows do not differ by two standard errors is declined), otherwise its streak
-//! is hidden and the photo is declined. At grazing incidence the object ball may creep a few radii
+//! resting balls is the object ball the object ball's slowing down tells, [`time_arrow`], or the
+//! light of a ball that slowed down into its disc beside the other, [`light_beside`]: a reading
+//! is declined where neither tells), otherwise its streak is hidden and the photo is declined. At grazing incidence the object ball may creep a few radii
 //! and stop with no streak: where a second disc of it is found ([`disc::companion`]) the scene is
 //! also read as such (`read_creep`; the waiting disc is the one the incoming line meets at `2R`),
 //! its path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
@@ -1019,6 +1019,44 @@ fn time_arrow(sig: &Signal, samples: &[Sample], s: (f64, f64), r: f64) -> Option
     (a.abs() > 1e-12).then(|| (b / a.abs(), (s2 / sxx).sqrt() / a.abs()))
 }
 
+/// Light of a streak's centre-line just beyond a resting ball at `s` (the brighter median of its
+/// samples 1–1.25 R and 1.25–1.5 R from `s`) over its light 2.5–4.5 R out, both against the
+/// lamp ([`Signal::illumination`]); `None` without samples in both places.
+fn light_beside(sig: &Signal, samples: &[Sample], s: (f64, f64), r: f64) -> Option<f64> {
+    let mut bins: [Vec<f32>; 3] = Default::default();
+    for q in samples {
+        let d = (q.x - s.0).hypot(q.y - s.1) / r;
+        let k = match d {
+            1.0..1.25 => 0,
+            1.25..1.5 => 1,
+            2.5..4.5 => 2,
+            _ => continue,
+        };
+        let l = f64::from(sig.illumination(q.x, q.y)).max(1e-6);
+        bins[k].push((q.amp / l) as f32);
+    }
+    let [near0, near1, far] = &mut bins;
+    if far.len() < 5 {
+        return None;
+    }
+    let far = f64::from(background::median(far));
+    let near = [near0, near1]
+        .into_iter()
+        .filter(|b| !b.is_empty())
+        .map(|b| f64::from(background::median(b)))
+        .fold(f64::NEG_INFINITY, f64::max);
+    (far > 0.0 && near.is_finite()).then(|| near / far)
+}
+
+/// Largest [`light_beside`] of the object ball's streak at its disc in a reading with a ball at
+/// rest at `P`. The object ball leaves at full speed and only slows down (sliding, then
+/// rolling), so the light beside its disc is at most its light farther on: 0.64–1.41 on 99 % of
+/// the 493 such readings of the right disc on 100 synthetic sets (session 39; two above 3, both
+/// declined for other reasons). A cue ball that came to rest there slowed down into its disc
+/// (drawn back or crept after the impact): above 3 on 81 of the 562 readings of a wrong disc,
+/// 7 for a cue ball drawn back 1 R (near head-on realistic 934 shot_018).
+const SLOW_LIGHT_MAX: f64 = 3.0;
+
 /// Median light (baseline-subtracted amplitude) of a streak's centre-line samples.
 fn median_amp(samples: &[Sample]) -> f64 {
     let mut a: Vec<f32> = samples.iter().map(|q| q.amp as f32).collect();
@@ -1899,14 +1937,14 @@ fn select_streaks(tracked: Vec<Tracked>, o: (f64, f64), r: f64, allow_narrow: bo
     }
 }
 
-/// The scene read around the object ball's disc `dsc`. `first_arrow` is set when this disc was
-/// taken from a ball resting at the first reading's impact point: that reading's difference of
-/// time arrows with its standard error (see [`time_arrow`]).
+/// The scene read around the object ball's disc `dsc`. `swapped` is set when this disc was
+/// taken from a ball resting at the first reading's impact point, with what told against that
+/// reading.
 fn read_from_disc(
     sig: &Signal,
     dsc: disc::Disc,
     opts: &AnalysisOptions,
-    first_arrow: Option<(f64, f64)>,
+    swapped: Option<Swapped>,
 ) -> Analysis {
     if std::env::var_os("STREAKFIT_DEBUG").is_some() {
         eprintln!(
@@ -1920,7 +1958,7 @@ fn read_from_disc(
         sig,
         dsc.clone(),
         opts,
-        first_arrow,
+        swapped,
         &mut tracks,
         true,
         &mut narrow,
@@ -1933,12 +1971,38 @@ fn read_from_disc(
         .flatten()
         .any(|sd| sd > NARROW_MAX_SD_DEG);
     if narrow && (a.status != Status::Ok || loose) {
-        let b = read_body(sig, dsc, opts, first_arrow, &mut tracks, false, &mut narrow);
+        let b = read_body(sig, dsc, opts, swapped, &mut tracks, false, &mut narrow);
         if b.status == Status::Ok {
             return b;
         }
     }
     a
+}
+
+/// Why a shot is read again with the ball resting at the first reading's impact point as the
+/// object ball.
+#[derive(Debug, Clone, Copy)]
+enum Swapped {
+    /// The first reading's time arrows did not show its object ball slowing down: their
+    /// difference and its standard error ([`time_arrow`]).
+    Arrows(f64, f64),
+    /// A slow ball's light lay beside the first reading's object disc ([`light_beside`]).
+    Trail(f64),
+}
+
+/// The disc of a ball resting at `p_imp` (refined from there, within R/2 of it), to read the shot
+/// again with it as the object ball.
+fn rest_disc_at(sig: &Signal, p_imp: (f64, f64), r: f64, contrast: f64) -> Option<disc::Disc> {
+    let c = disc::CoarseDisc {
+        cx: p_imp.0,
+        cy: p_imp.1,
+        r,
+        level: contrast as f32,
+        elongation: 1.0,
+    };
+    disc::refine(sig, &c)
+        .ok()
+        .filter(|d| (d.cx - p_imp.0).hypot(d.cy - p_imp.1) < 0.5 * r)
 }
 
 /// Largest stated sigma (degrees) of a rolling direction read with the narrow margin when the
@@ -2009,7 +2073,7 @@ fn read_body(
     sig: &Signal,
     mut dsc: disc::Disc,
     opts: &AnalysisOptions,
-    first_arrow: Option<(f64, f64)>,
+    swapped: Option<Swapped>,
     tracks: &mut DiscTracks,
     allow_narrow: bool,
     used_narrow: &mut bool,
@@ -2272,8 +2336,44 @@ fn read_body(
     // that the object ball leaves sliding and so brightens away from its disc.
     if cue_at_rest {
         let obj = time_arrow(sig, &measured[reading.b2], o, r);
+        // A ball waiting for the impact leaves at full speed and only slows down: the light of
+        // its streak just beyond its disc is no more than its light farther on. A ball that came
+        // to rest (a cue ball drawn back or crept after the impact) slowed down into its disc,
+        // and the light beside it is several times its streak's. That refutes a reading whose
+        // object disc is such a ball where the time arrows cannot tell: a rubber ball's slide
+        // ends within about 1 R, under its disc's edge (near head-on realistic 934 shot_018: a
+        // cue ball drawn back 1 R after a draw shot, taken for the object ball on the arrows,
+        // read psi 2.1° off at 0.25°). Light beside P says nothing for a reading by itself:
+        // another disc near P lights it too; it is measured from the disc of the ball resting
+        // there, below, before the roles are swapped.
+        let beside_obj = light_beside(sig, &measured[reading.b2], o, r);
         if debug {
-            eprintln!("time arrow: object {obj:?} incoming {inc:?}");
+            eprintln!(
+                "time arrow: object {obj:?} incoming {inc:?}; light beside the object disc \
+                 {beside_obj:?}"
+            );
+        }
+        if let Some(v) = beside_obj.filter(|&v| v > SLOW_LIGHT_MAX) {
+            out.reason = match swapped {
+                Some(Swapped::Trail(first)) => format!(
+                    "cannot tell which resting ball is the object ball (the light beside both is \
+                     a slow ball's: {first:.1} and {v:.1} times their streaks' farther on)"
+                ),
+                Some(Swapped::Arrows(..)) => format!(
+                    "cannot tell which resting ball is the object ball (the one at the first \
+                     reading's impact point, tried because the time arrows did not tell, has a \
+                     slow ball's light beside it, {v:.1} times its streak's farther on)"
+                ),
+                None => match rest_disc_at(sig, p_imp, r, dsc.contrast) {
+                    Some(d) => return read_from_disc(sig, d, opts, Some(Swapped::Trail(v))),
+                    None => format!(
+                        "the streak read as the object ball's has a slow ball's light beside \
+                         its disc ({v:.1} times its own farther on), and no resting ball was \
+                         found at the impact point to swap roles with"
+                    ),
+                },
+            };
+            return out;
         }
         // The object ball's brightening less the incoming one's, with its standard error: the
         // reading stands when the object ball clearly slows down more; otherwise the other
@@ -2283,16 +2383,29 @@ fn read_body(
         // its story makes negative: arrows that favour both readings are the lamp's or the
         // overlapping light's, not the balls' (near head-on realistic seed 919 shot_020: +7.7 ±
         // 4.8 % per R, then +6.1 ± 1.7 % for the swapped roles, read psi 0.21° for 4.05°).
+        // Where the light beside the first reading's object disc told the roles, the arrows need
+        // only not clearly contradict them.
         let arrows = obj.zip(inc).map(|(o, i)| (o.0 - i.0, o.1.hypot(i.1)));
-        let stands = |(diff, se): (f64, f64)| {
-            diff >= ARROW_SIGNIFICANCE * se
-                && first_arrow.is_none_or(|(d1, s1)| diff - d1 >= ARROW_SIGNIFICANCE * se.hypot(s1))
+        let stands = |(diff, se): (f64, f64)| match swapped {
+            Some(Swapped::Trail(_)) => diff > -ARROW_SIGNIFICANCE * se,
+            Some(Swapped::Arrows(d1, s1)) => {
+                diff >= ARROW_SIGNIFICANCE * se && diff - d1 >= ARROW_SIGNIFICANCE * se.hypot(s1)
+            }
+            None => diff >= ARROW_SIGNIFICANCE * se,
         };
         if let Some((diff, se)) = arrows
             && !stands((diff, se))
         {
-            if let Some((d1, s1)) = first_arrow {
-                out.reason = format!(
+            let why = match swapped {
+                Some(Swapped::Trail(first)) => Some(format!(
+                    "cannot tell which resting ball is the object ball (the light beside the \
+                     other is a slow ball's, {first:.1} times its streak's farther on, but the \
+                     time arrows say it is: the object ball brightens away from its disc by \
+                     {:+.1} ± {:.1} % per R more than the incoming streak here)",
+                    100.0 * diff,
+                    100.0 * se
+                )),
+                Some(Swapped::Arrows(d1, s1)) => Some(format!(
                     "cannot tell which resting ball is the object ball (the object ball \
                      brightens away from its disc by {:+.1} ± {:.1} % per R more than the \
                      incoming streak here, by {:+.1} ± {:.1} % with the roles swapped: neither \
@@ -2301,31 +2414,43 @@ fn read_body(
                     100.0 * se,
                     100.0 * d1,
                     100.0 * s1
-                );
-                return out;
-            }
-            let c = disc::CoarseDisc {
-                cx: p_imp.0,
-                cy: p_imp.1,
-                r,
-                level: dsc.contrast as f32,
-                elongation: 1.0,
-            };
-            return match disc::refine(sig, &c) {
-                Ok(d) if (d.cx - p_imp.0).hypot(d.cy - p_imp.1) < 0.5 * r => {
-                    read_from_disc(sig, d, opts, Some((diff, se)))
-                }
-                _ => {
-                    out.reason = format!(
+                )),
+                None => match rest_disc_at(sig, p_imp, r, dsc.contrast) {
+                    // The ball resting at P came to rest there slowly: it is the cue ball, and
+                    // this reading stands on that where its arrows could not tell.
+                    // Measured from the rim's consensus where the disc's edges disagree: a
+                    // smear or another ball beside it pulls the circle of every edge, and light
+                    // beside the wrong centre is the ball's own (near head-on realistic 913
+                    // shot_005: a disc 33 px off a red object ball, pulled by the cue ball's
+                    // smear, read the red ball's edge as slow light beside it).
+                    Some(d)
+                        if {
+                            let c = d.rim.as_deref().unwrap_or(&d);
+                            let v = light_beside(sig, &measured[reading.inc], (c.cx, c.cy), r);
+                            if debug {
+                                eprintln!("light beside the ball resting at P: {v:?}");
+                            }
+                            v.is_some_and(|v| v > SLOW_LIGHT_MAX)
+                        } =>
+                    {
+                        None
+                    }
+                    Some(d) => {
+                        return read_from_disc(sig, d, opts, Some(Swapped::Arrows(diff, se)));
+                    }
+                    None => Some(format!(
                         "the streak read as the object ball's does not clearly slow down away \
                          from its disc ({:+.1} ± {:.1} % per R more than the incoming one), and \
                          no resting ball was found at the impact point to swap roles with",
                         100.0 * diff,
                         100.0 * se
-                    );
-                    out
-                }
+                    )),
+                },
             };
+            if let Some(why) = why {
+                out.reason = why;
+                return out;
+            }
         }
     }
     // A cue ball resting at or near P paints a disc (drawn back, also the short way to it) some
