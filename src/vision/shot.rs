@@ -12,8 +12,8 @@
 //! stationary disc sits at `P` (then `delta1`, `theta1` are undefined; which of the two touching
 //! resting balls is the object ball the object ball's slowing down tells, [`time_arrow`], or the
 //! light of a ball that slowed down into its disc beside the other, [`light_beside`]: a reading
-//! is declined where neither tells), otherwise its streak is hidden and the photo is declined. At grazing incidence the object ball may creep a few radii
-//! and stop with no streak: where a second disc of it is found ([`disc::companion`]) the scene is
+//! is declined where neither tells), otherwise its streak is hidden and the photo is declined.
+//! At grazing incidence the object ball may creep a few radii and stop with no streak: where a second disc of it is found ([`disc::companion`]) the scene is
 //! also read as such (`read_creep`; the waiting disc is the one the incoming line meets at `2R`),
 //! its path is the line between the discs (`theta2` its direction, `delta2` unresolved), and the
 //! cheaper of the two readings holds. A fitted psi within two sigma of 90° is declined. Where no
@@ -2415,37 +2415,37 @@ fn read_body(
                     100.0 * d1,
                     100.0 * s1
                 )),
-                None => match rest_disc_at(sig, p_imp, r, dsc.contrast) {
-                    // The ball resting at P came to rest there slowly: it is the cue ball, and
-                    // this reading stands on that where its arrows could not tell.
-                    // Measured from the rim's consensus where the disc's edges disagree: a
-                    // smear or another ball beside it pulls the circle of every edge, and light
-                    // beside the wrong centre is the ball's own (near head-on realistic 913
-                    // shot_005: a disc 33 px off a red object ball, pulled by the cue ball's
-                    // smear, read the red ball's edge as slow light beside it).
-                    Some(d)
-                        if {
-                            let c = d.rim.as_deref().unwrap_or(&d);
-                            let v = light_beside(sig, &measured[reading.inc], (c.cx, c.cy), r);
-                            if debug {
-                                eprintln!("light beside the ball resting at P: {v:?}");
-                            }
-                            v.is_some_and(|v| v > SLOW_LIGHT_MAX)
-                        } =>
-                    {
-                        None
+                None => {
+                    let rest = rest_disc_at(sig, p_imp, r, dsc.contrast);
+                    // A ball resting at P that came to rest there slowly is the cue ball, and
+                    // this reading stands on that where its arrows could not tell. Measured from
+                    // the rim's consensus where the disc's edges disagree: a smear or another
+                    // ball beside it pulls the circle of every edge, and light beside the wrong
+                    // centre is the ball's own (near head-on realistic 913 shot_005: a disc 33 px
+                    // off a red object ball, pulled by the cue ball's smear, read the red ball's
+                    // edge as slow light beside it).
+                    let beside_rest = rest.as_ref().and_then(|d| {
+                        let c = d.rim.as_deref().unwrap_or(d);
+                        light_beside(sig, &measured[reading.inc], (c.cx, c.cy), r)
+                    });
+                    if debug {
+                        eprintln!("light beside the ball resting at P: {beside_rest:?}");
                     }
-                    Some(d) => {
-                        return read_from_disc(sig, d, opts, Some(Swapped::Arrows(diff, se)));
+                    match rest {
+                        _ if beside_rest.is_some_and(|v| v > SLOW_LIGHT_MAX) => None,
+                        Some(d) => {
+                            return read_from_disc(sig, d, opts, Some(Swapped::Arrows(diff, se)));
+                        }
+                        None => Some(format!(
+                            "the streak read as the object ball's does not clearly slow down \
+                             away from its disc ({:+.1} ± {:.1} % per R more than the incoming \
+                             one), and no resting ball was found at the impact point to swap \
+                             roles with",
+                            100.0 * diff,
+                            100.0 * se
+                        )),
                     }
-                    None => Some(format!(
-                        "the streak read as the object ball's does not clearly slow down away \
-                         from its disc ({:+.1} ± {:.1} % per R more than the incoming one), and \
-                         no resting ball was found at the impact point to swap roles with",
-                        100.0 * diff,
-                        100.0 * se
-                    )),
-                },
+                }
             };
             if let Some(why) = why {
                 out.reason = why;
