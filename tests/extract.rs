@@ -149,6 +149,20 @@ fn declined_of_24(name: &str, seed: u64, extra: &[&str], file: &str, psi_deg: f6
     shot
 }
 
+/// The row of `file` in realistic seed `seed`'s folder of 24 (with its texture map; `extra`
+/// synth flags), asserted at true psi `psi_deg` and `ok` with psi and `theta2` within 3 stated
+/// sigmas, for its reason to be checked.
+fn ok_of_24(name: &str, seed: u64, extra: &[&str], file: &str, psi_deg: f64) -> ShotRow {
+    let (shot, t) = one_of_24_with(name, "realistic", seed, extra, file);
+    assert!(
+        (t[&shot.file]["psi_deg"].parse::<f64>().unwrap() - psi_deg).abs() < 0.01,
+        "{:?}",
+        t[&shot.file]
+    );
+    assert_ok_within_3_sigma(&shot, &t, &["psi", "theta2"]);
+    shot
+}
+
 /// `synth` flags of the near head-on realistic sets of session 31 (seeds 911–934).
 const NEAR_HEAD_ON_MIXED: &[&str] = &["--material", "mixed", "--psi", "0:12"];
 
@@ -1289,19 +1303,13 @@ fn a_disc_crossed_by_the_cue_balls_path_is_read_from_its_rims_circle() {
     // cloth. The circle of every edge of that disc is 3.7 px off with its radius 6.7 px short,
     // and until session 37 the shot read `ok` at psi 13.74° ± 0.31° and theta2 2.72° for
     // 0.83°. The consensus of the rim's edges lies 11 px from it and reads psi 12.2° ± 0.20°.
-    let (r, t) = one_of_24_with(
+    let r = ok_of_24(
         "rim_circle",
-        "realistic",
         3706,
         NEAR_HEAD_ON_MIXED,
         "shot_024.jpg",
+        11.96,
     );
-    assert!(
-        (t[&r.file]["psi_deg"].parse::<f64>().unwrap() - 11.96).abs() < 0.01,
-        "{:?}",
-        t[&r.file]
-    );
-    assert_ok_within_3_sigma(&r, &t, &["psi", "theta2"]);
     assert!(
         r.reason
             .starts_with("read from the circle of the object ball's rim alone"),
@@ -1320,19 +1328,13 @@ fn a_cue_ball_drawn_back_to_rest_shows_which_resting_ball_it_is() {
     // declined the shot, the swapped reading's arrows not beating the first one's. The light
     // beside the ball resting at `P` is 14 times its streak's farther on: it slowed down into
     // its disc, so it is the cue ball, and since session 39 the first reading stands.
-    let (r, t) = one_of_24_with(
+    let r = ok_of_24(
         "swapped_rest",
-        "realistic",
         919,
         NEAR_HEAD_ON_MIXED,
         "shot_020.jpg",
+        4.05,
     );
-    assert!(
-        (t[&r.file]["psi_deg"].parse::<f64>().unwrap() - 4.05).abs() < 0.01,
-        "{:?}",
-        t[&r.file]
-    );
-    assert_ok_within_3_sigma(&r, &t, &["psi", "theta2"]);
     assert!(
         r.reason
             .starts_with("cue ball comes to rest near the impact"),

@@ -996,10 +996,7 @@ fn ring_samples(
 fn time_arrow(sig: &Signal, samples: &[Sample], s: (f64, f64), r: f64) -> Option<(f64, f64)> {
     let pts: Vec<(f64, f64)> = samples
         .iter()
-        .map(|q| {
-            let l = f64::from(sig.illumination(q.x, q.y)).max(1e-6);
-            ((q.x - s.0).hypot(q.y - s.1) / r, q.amp / l)
-        })
+        .map(|q| lamp_light(sig, q, s, r))
         .filter(|(d, _)| (1.5..=6.0).contains(d))
         .collect();
     if pts.len() < 5 {
@@ -1019,21 +1016,27 @@ fn time_arrow(sig: &Signal, samples: &[Sample], s: (f64, f64), r: f64) -> Option
     (a.abs() > 1e-12).then(|| (b / a.abs(), (s2 / sxx).sqrt() / a.abs()))
 }
 
+/// A centre-line sample's distance from `s` (in R) and its light against the lamp (its amplitude
+/// over the cloth's illumination there), as [`time_arrow`] and [`light_beside`] read it.
+fn lamp_light(sig: &Signal, q: &Sample, s: (f64, f64), r: f64) -> (f64, f64) {
+    let l = f64::from(sig.illumination(q.x, q.y)).max(1e-6);
+    ((q.x - s.0).hypot(q.y - s.1) / r, q.amp / l)
+}
+
 /// Light of a streak's centre-line just beyond a resting ball at `s` (the brighter median of its
 /// samples 1–1.25 R and 1.25–1.5 R from `s`) over its light 2.5–4.5 R out, both against the
 /// lamp ([`Signal::illumination`]); `None` without samples in both places.
 fn light_beside(sig: &Signal, samples: &[Sample], s: (f64, f64), r: f64) -> Option<f64> {
     let mut bins: [Vec<f32>; 3] = Default::default();
     for q in samples {
-        let d = (q.x - s.0).hypot(q.y - s.1) / r;
+        let (d, light) = lamp_light(sig, q, s, r);
         let k = match d {
             1.0..1.25 => 0,
             1.25..1.5 => 1,
             2.5..4.5 => 2,
             _ => continue,
         };
-        let l = f64::from(sig.illumination(q.x, q.y)).max(1e-6);
-        bins[k].push((q.amp / l) as f32);
+        bins[k].push(light as f32);
     }
     let [near0, near1, far] = &mut bins;
     if far.len() < 5 {
