@@ -328,6 +328,31 @@ fn clean_tier_accuracy() {
     }
 }
 
+/// 25 mm steel balls at the synthetic sets' scale (R ≈ 44 px) on the clean tier. The disc's edge
+/// rule read the lit side of the waiting ball's limb short, moving `O` up to 0.06 px away from
+/// the lamp, which at this size was most of psi's error (median 0.061° here, against the clean
+/// target's 0.05°). Session 40 takes that bias off (`vision::disc::shading_bias`): measured psi
+/// 0.037°, theta1 0.034°, theta2 0.034°, 24 of 24 `ok` (seed 4002: 0.043°, 0.042°, 0.043°).
+#[test]
+fn small_steel_balls_meet_the_clean_targets() {
+    let dir = scratch("steel_clean");
+    synth(
+        &dir,
+        "clean",
+        24,
+        4001,
+        &["--material", "steel", "--size", "2400x1600"],
+    );
+    let (errs, rows) = extract_errors(&dir, 24, &[]);
+    let _ = std::fs::remove_dir_all(&dir);
+    let ok = rows.iter().filter(|r| r.status == Status::Ok).count();
+    assert!(ok >= 23, "ok {ok}/24");
+    for k in ["psi", "theta1", "theta2"] {
+        let m = median(errs[k].clone());
+        assert!(m < 0.05, "{k} median error {m:.4}°");
+    }
+}
+
 /// Without a plate the cloth's fixed texture (blotches of the ball's size) moves the faint
 /// streaks' centre-lines. The folder's own photos give it (`vision::texture`, the default); with
 /// `--no-texture` the colour projection of `vision::background` (cloth covariance weighted down)
@@ -1236,10 +1261,14 @@ fn an_object_streak_must_have_its_waiting_discs_colour() {
     // 23.1° for 2.0°: the streak taken for the object ball's leaves the disc in another colour
     // (likeness 0.61 to the disc's own, measured on an annulus that leaves the highlight out;
     // every right reading on 45 comparison tables is at 0.917 or more). One ball paints both.
+    // Since session 40 a scene whose streaks give no reading is also tried without the cue
+    // ball's path (two of its streaks); that reading, psi 22.7° ± 0.96°, is held to the checks
+    // of a hidden path and refused as well.
     let (shot, t) = one_of_24("object_colour", "realistic", 707, "shot_021.jpg");
     assert_declined_photo(&shot, &t[&shot.file], 10.65);
     assert!(
-        shot.reason.contains("another colour than the disc"),
+        shot.reason.contains("another colour than the disc")
+            || shot.reason.contains("too uncertain to read the shot without it"),
         "{}",
         shot.reason
     );
@@ -1340,6 +1369,52 @@ fn a_cue_ball_drawn_back_to_rest_shows_which_resting_ball_it_is() {
             .starts_with("cue ball comes to rest near the impact"),
         "{}",
         r.reason
+    );
+}
+
+#[test]
+fn a_faint_third_streak_that_fits_no_role_leaves_a_two_streak_reading() {
+    // Near head-on realistic seed 918's shot_024 (billiard, psi 3.99°, a stun shot): the cue
+    // ball stops against the object ball; besides the incoming and the object ball's streaks a
+    // faint short streak (18 samples) is found, which is no way out of `P` for the cue ball. Until
+    // session 40 no reading was tried without the cue ball's path when three streaks were
+    // found, and the shot was declined ("no physical reading of the streaks"); it is now read
+    // as the two streaks it has, with the checks of a two-streak reading (on the 100 sets: 19
+    // rows gained, 18 of them right).
+    let r = ok_of_24(
+        "third_streak",
+        918,
+        NEAR_HEAD_ON_MIXED,
+        "shot_024.jpg",
+        3.99,
+    );
+    assert!(
+        r.reason
+            .starts_with("cue ball comes to rest near the impact"),
+        "{}",
+        r.reason
+    );
+}
+
+#[test]
+fn a_follow_shot_is_not_read_as_a_stun_shot() {
+    // Near head-on realistic seed 924's shot_004 (billiard, psi 5.03°, follow r = 1.41): the
+    // cue ball stops at `P` for a moment and then rolls after the object ball along its path.
+    // Read as a stun shot (a ball resting at `P`), psi came out 10.9° ± 0.34°: the object
+    // ball's streak holds both balls' light, 3.1 times the incoming streak's, where one ball
+    // leaving a stopped cue ball paints at most 1.9 times (`REST_LIGHT_MAX` 2.5).
+    let shot = declined_of_24(
+        "follow_not_stun",
+        924,
+        NEAR_HEAD_ON_MIXED,
+        "shot_004.jpg",
+        5.03,
+    );
+    assert!(
+        shot.reason
+            .contains("the cue ball probably rolled on after it"),
+        "{}",
+        shot.reason
     );
 }
 

@@ -9,12 +9,14 @@
 //! 3.5 σ off and refit), giving `O`, `R` and their standard errors `σ_R = s_B / sqrt(n_B)`,
 //! `σ_O = σ_R sqrt 2` from the scatter `s_B` of the mean radial residuals of `n_B` blocks of
 //! neighbouring rays (at least the rays' own `σ_r / sqrt(n)`): neighbouring edges share pixels.
-//! The edge of a shaded ball is read short (the half-level rule extrapolates the limb's level
-//! with a line, and a Lambert limb falls like `√(R − ρ)`): −0.034 to −0.036 px with the light
-//! straight above, −0.003 to −0.006 px oblique, at R ≈ 98 px (the tests below). That bias is
-//! not in `σ_R`: added to the joint fit's prior as 0.02 px (tried), it let a path model that
-//! misfits (a short straight cue path forced through P) pull `R` by 13 sigma, and on 17
-//! synthetic sets it read one more row wrong and every angle slightly worse.
+//! The edge of a shaded ball is read off by the half-level rule, which extrapolates the limb's
+//! level with a line where a Lambert limb rises like `√(R − ρ)`: the lit side's edge reads
+//! short by more than the dark side's, so the centre moves away from the lamp (up to 0.06 px at
+//! R = 44 px) and the radius reads up to 0.055 px short with the lamp overhead. Since session 40
+//! that bias is taken off: the disc's own shading (`a + b max(0, n·l)`, clipped where the photo
+//! saturates) is fitted to its pixels, the same rays and circle are run on a noise-free image of
+//! that ball, and their offset from the model's circle is subtracted ([`shading_bias`]); what
+//! is left is within 0.006 px of the centre and +0.014 px of the radius (the tests below).
 //!
 //! A streak across the disc (a follow shot's cue ball rolling on over the object ball's waiting
 //! place) or a limb of the cloth's colour moves a run of edges several pixels inward, and the
@@ -598,13 +600,14 @@ pub fn refine_excluding(
     c: &CoarseDisc,
     other: Option<(f64, f64)>,
 ) -> Result<Disc, String> {
+    let sample = |x: f64, y: f64| sig.sample(x, y);
     let (mut cx, mut cy, mut r) = (c.cx, c.cy, c.r);
     let mut result: Option<Disc> = None;
     // The rim's consensus circle of a pass whose edges disagree with their fit.
     let mut rim_start = None;
     // Two passes: the second starts from the first fit, so rays are radial to the true centre.
     for _pass in 0..2 {
-        let (pts, md) = edge_pass(sig, (cx, cy, r), other)?;
+        let (pts, md) = edge_pass(&sample, (cx, cy, r), other)?;
         let rim = if other.is_none() {
             rim_points(&pts, r).and_then(trimmed_circle)
         } else {
@@ -641,7 +644,7 @@ pub fn refine_excluding(
     // from rays radial to its own circle, and kept beside the disc when it still lies more than
     // `RIM_SWITCH_PX` away: the shot is then read from both ([`crate::vision::shot`]).
     if let Some(start) = rim_start
-        && let Ok((pts, md)) = edge_pass(sig, start, None)
+        && let Ok((pts, md)) = edge_pass(&sample, start, None)
         && let Some(rim) = rim_points(&pts, start.2).and_then(trimmed_circle)
     {
         let d_c = (rim.c.0 - disc.cx).hypot(rim.c.1 - disc.cy);
@@ -661,11 +664,267 @@ pub fn refine_excluding(
     Ok(disc)
 }
 
+/// How far [`refine`] reads the disc `d` off under its own shading, `(dx, dy, dr)` px, to be
+/// subtracted from its centre and radius (see [`shading_bias_on`]); `None` where the shading
+/// model does not describe the disc.
+pub fn shading_bias(sig: &Signal, d: &Disc) -> Option<(f64, f64, f64)> {
+    let b = shading_bias_on(&|x, y| sig.sample(x, y), (d.cx, d.cy, d.r));
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!("disc shading: the edge rule's bias {b:.3?} px");
+    }
+    b
+}
+
+/// A matte ball's light under one lamp and the room's light: `a + b max(0, n·l)` at each point
+/// of its disc (the surface normal `n`, the unit direction `l` towards the lamp), over the
+/// cloth's level `cloth`, in the signal's units.
+#[derive(Debug, Clone, Copy)]
+struct Shading {
+    cloth: f64,
+    a: f64,
+    b: f64,
+    l: [f64; 3],
+    /// The level where the photo's channels clip (a waiting disc saturated but for its limb),
+    /// over the cloth's: the highest light inside the disc.
+    clip: f64,
+}
+
+impl Shading {
+    /// The light at `(x, y)` relative to the disc's centre, in radii, inside the disc.
+    #[inline]
+    fn at(&self, dx: f64, dy: f64) -> f64 {
+        let nz = (1.0 - dx * dx - dy * dy).max(0.0).sqrt();
+        let ndl = dx * self.l[0] + dy * self.l[1] + nz * self.l[2];
+        self.a + self.b * ndl.max(0.0)
+    }
+}
+
+/// A lamp direction's least squares in [`fit_shading`]: residual sum of squares, `a`, `b`.
+type LampFit = (f64, f64, f64);
+
+/// Lamp directions `(l_x, l_y)` per unit height searched by [`fit_shading`]: a coarse grid
+/// of this half-width and step, then two finer ones around the best.
+const SHADING_SPAN: f64 = 1.0;
+const SHADING_STEP: f64 = 0.25;
+
+/// The [`Shading`] of the disc `(cx, cy, r)` from its pixels: the cloth's level from a ring at
+/// 1.25–1.45 R, and `a`, `b` by least squares for each lamp direction of a grid (the best, then
+/// finer grids around it), from the pixels inside `r - 2` (the rim's pixels are what the edge
+/// rule reads; the shading is measured where the edge is not). Pixels more than 3 robust sigmas
+/// off the first fit (a highlight, a mark on the ball, a streak across it) are left out of the
+/// finer ones. `None` when the disc has too few pixels or no lamp light (`b ≤ 0`).
+fn fit_shading(
+    sample: &impl Fn(f64, f64) -> Option<f32>,
+    (cx, cy, r): (f64, f64, f64),
+) -> Option<Shading> {
+    let mut ring = Vec::with_capacity(256);
+    for k in 0..128 {
+        let a = std::f64::consts::TAU * k as f64 / 128.0;
+        for rho in [1.25 * r, 1.45 * r] {
+            if let Some(v) = sample(cx + rho * a.cos(), cy + rho * a.sin()) {
+                ring.push(v);
+            }
+        }
+    }
+    if ring.len() < 64 {
+        return None;
+    }
+    let cloth = median(&mut ring) as f64;
+    let noise = 1.4826
+        * median(
+            &mut ring
+                .iter()
+                .map(|v| (*v as f64 - cloth).abs() as f32)
+                .collect::<Vec<_>>(),
+        ) as f64;
+    // Pixel centres inside `r - 1.5`, every `stride`-th row and column: some 3,000 to 6,000.
+    let stride = ((r / 40.0).round() as usize).max(1);
+    let inner = r - 1.5;
+    let mut px: Vec<([f64; 3], f64)> = Vec::new();
+    let (x0, x1) = ((cx - inner).ceil() as i64, (cx + inner).floor() as i64);
+    let (y0, y1) = ((cy - inner).ceil() as i64, (cy + inner).floor() as i64);
+    for y in (y0..=y1).step_by(stride) {
+        for x in (x0..=x1).step_by(stride) {
+            let (dx, dy) = ((x as f64 - cx) / r, (y as f64 - cy) / r);
+            let rho2 = dx * dx + dy * dy;
+            if rho2 * r * r > inner * inner {
+                continue;
+            }
+            if let Some(v) = sample(x as f64, y as f64) {
+                px.push(([dx, dy, (1.0 - rho2).sqrt()], v as f64 - cloth));
+            }
+        }
+    }
+    if px.len() < 200 {
+        return None;
+    }
+    // A disc saturated but for its limb (a bright ball resting half the exposure): the pixels at
+    // the clip level say nothing of the shading and are left out; the model is clipped there.
+    let clip = {
+        let mut v: Vec<f32> = px.iter().map(|p| p.1 as f32).collect();
+        let k = (v.len() * 995 / 1000).min(v.len() - 1);
+        *v.select_nth_unstable_by(k, |a, b| a.total_cmp(b)).1 as f64
+    };
+    let unclipped: Vec<bool> = px.iter().map(|p| p.1 < clip - 2.0 * noise).collect();
+    if unclipped.iter().filter(|k| **k).count() < 100 {
+        return None;
+    }
+    // Least squares of `y = a + b f` over the kept pixels for lamp direction `l`.
+    let solve = |l: [f64; 3], keep: &[bool]| -> Option<LampFit> {
+        let (mut n, mut sf, mut sff, mut sy, mut sfy, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for ((nv, y), k) in px.iter().zip(keep) {
+            if !*k {
+                continue;
+            }
+            let f = (nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2]).max(0.0);
+            n += 1.0;
+            sf += f;
+            sff += f * f;
+            sy += y;
+            sfy += f * y;
+            syy += y * y;
+        }
+        let det = n * sff - sf * sf;
+        if det <= 1e-12 * n * n {
+            return None;
+        }
+        let b = (n * sfy - sf * sy) / det;
+        let a = (sy - b * sf) / n;
+        let sse = syy - a * sy - b * sfy;
+        Some((sse, a, b))
+    };
+    let unit = |lx: f64, ly: f64| {
+        let m = (lx * lx + ly * ly + 1.0).sqrt();
+        [lx / m, ly / m, 1.0 / m]
+    };
+    let search = |keep: &[bool], centre: (f64, f64), half: f64, step: f64| {
+        let n = (half / step).round() as i64;
+        let mut best: Option<((f64, f64), LampFit)> = None;
+        for i in -n..=n {
+            for j in -n..=n {
+                let (lx, ly) = (centre.0 + i as f64 * step, centre.1 + j as f64 * step);
+                if let Some(f) = solve(unit(lx, ly), keep)
+                    && best.is_none_or(|b| f.0 < b.1.0)
+                {
+                    best = Some(((lx, ly), f));
+                }
+            }
+        }
+        best
+    };
+    let (l0, (_, a0, b0)) = search(&unclipped, (0.0, 0.0), SHADING_SPAN, SHADING_STEP)?;
+    let l = unit(l0.0, l0.1);
+    let res: Vec<f32> = px
+        .iter()
+        .map(|(nv, y)| (y - a0 - b0 * (nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2]).max(0.0)) as f32)
+        .collect();
+    let mut abs: Vec<f32> = res
+        .iter()
+        .zip(&unclipped)
+        .filter(|(_, u)| **u)
+        .map(|(v, _)| v.abs())
+        .collect();
+    let s = 1.4826 * median(&mut abs) as f64;
+    let keep: Vec<bool> = res
+        .iter()
+        .zip(&unclipped)
+        .map(|(v, u)| *u && (*v as f64).abs() <= 3.0 * s.max(1e-9))
+        .collect();
+    let (l1, _) = search(&keep, l0, SHADING_STEP, SHADING_STEP / 4.0)?;
+    let (l2, (_, a, b)) = search(&keep, l1, SHADING_STEP / 4.0, SHADING_STEP / 16.0)?;
+    (b > 0.0).then_some(Shading {
+        cloth,
+        a,
+        b,
+        l: unit(l2.0, l2.1),
+        clip,
+    })
+}
+
+/// Sub-pixels per axis of a model pixel that the rim crosses ([`shading_bias_on`]).
+const MODEL_SUBPIXELS: usize = 4;
+
+/// Largest bias (px, centre or radius) that [`shading_bias_on`] takes off: beyond it the model does
+/// not describe the ball (a striped or marked ball, a disc half under a streak).
+const SHADING_BIAS_MAX: f64 = 0.3;
+
+/// How far the edge rule of [`refine`] reads the disc `(cx, cy, r)` off under its own shading:
+/// the disc's [`Shading`] is fitted, a noise-free image of that ball on plain cloth is made
+/// (pixels averaged over [`MODEL_SUBPIXELS`]² sub-pixels where the rim crosses them), and the
+/// same two passes of rays and trimmed circle are run on it. Their circle minus the model's is
+/// the bias `(dx, dy, dr)`, to be subtracted. The half-level rule reads the lit side's edge,
+/// whose light rises like a square root from the limb, short by more than the dark side's,
+/// where the lamp does not reach the limb: the centre moves away from the lamp, by up to 0.06
+/// px at R = 44 px and 0.025 px at R = 98 px with the lamp 20° from overhead (the synthetic
+/// tiers' range), and the radius reads up to 0.05 px short with the lamp overhead.
+fn shading_bias_on(
+    sample: &impl Fn(f64, f64) -> Option<f32>,
+    (cx, cy, r): (f64, f64, f64),
+) -> Option<(f64, f64, f64)> {
+    let sh = fit_shading(sample, (cx, cy, r))?;
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!("disc shading fit: {sh:?}");
+    }
+    // The model's pixels over the square the rays reach (1.45 R), plus the sampler's margin.
+    let half = (1.5 * r).ceil() as i64 + 3;
+    let (ox, oy) = (cx.round() as i64 - half, cy.round() as i64 - half);
+    let n = (2 * half + 1) as usize;
+    let sub = MODEL_SUBPIXELS;
+    let mut img = vec![0f32; n * n];
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = ((ox + i as i64) as f64 - cx, (oy + j as i64) as f64 - cy);
+            let d = x.hypot(y);
+            let v = if d <= r - 1.0 {
+                sh.at(x / r, y / r)
+            } else if d >= r + 1.0 {
+                0.0
+            } else {
+                let mut acc = 0.0;
+                for sj in 0..sub {
+                    for si in 0..sub {
+                        let sx = x + (si as f64 + 0.5) / sub as f64 - 0.5;
+                        let sy = y + (sj as f64 + 0.5) / sub as f64 - 0.5;
+                        if sx * sx + sy * sy < r * r {
+                            acc += sh.at(sx / r, sy / r);
+                        }
+                    }
+                }
+                acc / (sub * sub) as f64
+            };
+            img[j * n + i] = (sh.cloth + v.min(sh.clip)) as f32;
+        }
+    }
+    let model = |x: f64, y: f64| -> Option<f32> {
+        let (fx, fy) = (x - ox as f64, y - oy as f64);
+        if !(fx >= 0.0 && fy >= 0.0) {
+            return None;
+        }
+        let (i, j) = (fx as usize, fy as usize);
+        if i + 1 >= n || j + 1 >= n {
+            return None;
+        }
+        let (tx, ty) = ((fx - i as f64) as f32, (fy - j as f64) as f32);
+        let v = |i: usize, j: usize| img[j * n + i];
+        Some(
+            (1.0 - ty) * ((1.0 - tx) * v(i, j) + tx * v(i + 1, j))
+                + ty * ((1.0 - tx) * v(i, j + 1) + tx * v(i + 1, j + 1)),
+        )
+    };
+    let mut c = (cx, cy, r);
+    for _pass in 0..2 {
+        let (pts, _) = edge_pass(&model, c, None).ok()?;
+        c = trimmed_circle(pts)?.c;
+    }
+    let b = (c.0 - cx, c.1 - cy, c.2 - r);
+    (b.0.abs().max(b.1.abs()).max(b.2.abs()) <= SHADING_BIAS_MAX).then_some(b)
+}
+
 /// One pass of [`refine_excluding`] around the circle `(cx, cy, r)`: the edge on each ray
 /// (skipping those facing `other`), kept where the ray's drop across it is at least half the
 /// median drop; with that median.
 fn edge_pass(
-    sig: &Signal,
+    sample: &impl Fn(f64, f64) -> Option<f32>,
     (cx, cy, r): (f64, f64, f64),
     other: Option<(f64, f64)>,
 ) -> Result<(Vec<(f64, f64)>, f32), String> {
@@ -687,7 +946,7 @@ fn edge_pass(
         let mut ok = true;
         for (i, p) in prof.iter_mut().enumerate() {
             let rr = r_in + step * i as f64;
-            match sig.sample(cx + rr * ca, cy + rr * sa) {
+            match sample(cx + rr * ca, cy + rr * sa) {
                 Some(v) => *p = v,
                 None => {
                     ok = false;
@@ -935,8 +1194,22 @@ mod tests {
         noise: f64,
         seed: Option<u64>,
     ) -> (f64, Disc) {
+        lit_radius_error(r, c, light, 300.0, noise, seed)
+    }
+
+    /// [`radius_error`] with the lamp level `lamp` (DN for albedo 1; 300 in the other tests, and
+    /// a white ball resting half the exposure clips from about 600).
+    fn lit_radius_error(
+        r: f64,
+        c: (f64, f64),
+        light: [f64; 3],
+        lamp: f64,
+        noise: f64,
+        seed: Option<u64>,
+    ) -> (f64, Disc) {
         let mut bd = Backdrop::plain(300, 300, noise);
         bd.light = light;
+        bd.lamp = lamp;
         let frame = Frame {
             segments: vec![],
             discs: vec![render::Disc {
@@ -949,7 +1222,10 @@ mod tests {
         };
         let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, seed);
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
-        let d = refine(&sig, &coarse_start(c, r)).expect("disc");
+        let mut d = refine(&sig, &coarse_start(c, r)).expect("disc");
+        if let Some((dx, dy, dr)) = shading_bias(&sig, &d) {
+            (d.cx, d.cy, d.r) = (d.cx - dx, d.cy - dy, d.r - dr);
+        }
         (d.r - r, d)
     }
 
@@ -969,15 +1245,53 @@ mod tests {
     const LIGHTS: [[f64; 3]; 3] = [[0.0, 0.0, 1.0], [-0.3, -0.4, 1.0], [0.4, -0.1, 1.0]];
     const CENTRES: [(f64, f64); 3] = [(150.0, 150.0), (150.27, 149.61), (149.5, 150.5)];
 
+    /// The edge rule's bias under the disc's own shading is taken off ([`shading_bias`]): the
+    /// mean centre and radius errors over six noise draws, for steel (R = 44 px) and billiard
+    /// (R = 98 px) balls, the lamp overhead and 20–30° off it, and a disc saturated but for its
+    /// limb (lamp × 3). Before (the half-level rule alone), measured here: centres up to 0.058
+    /// px off at R = 44 and 0.024 px at R = 98, away from the lamp; radii −0.055 px with the
+    /// lamp overhead. After: centres within 0.006 px, radii within +0.014 px.
+    #[test]
+    fn the_edge_rules_shading_bias_is_taken_off() {
+        for r in [44.3, 98.37] {
+            for (l, lamp) in [
+                ([0.0, 0.0, 1.0], 300.0),
+                ([-0.3, -0.4, 1.0], 300.0),
+                ([0.4, -0.1, 1.0], 300.0),
+                ([0.4, 0.4, 1.0], 300.0),
+                ([0.4, -0.1, 1.0], 900.0),
+            ] {
+                let n = 6;
+                let mut mean = (0.0, 0.0, 0.0);
+                for s in 1..=n {
+                    let c = CENTRES[s as usize % 3];
+                    let (dr, d) = lit_radius_error(r, c, l, lamp, 0.3, Some(s));
+                    mean.0 += (d.cx - (c.0 - 0.5)) / n as f64;
+                    mean.1 += (d.cy - (c.1 - 0.5)) / n as f64;
+                    mean.2 += dr / n as f64;
+                }
+                assert!(
+                    mean.0.abs().max(mean.1.abs()) <= 0.012 && (-0.01..=0.02).contains(&mean.2),
+                    "R {r}, light {l:?}, lamp {lamp}: centre ({:+.4}, {:+.4}), radius {:+.4} px",
+                    mean.0,
+                    mean.1,
+                    mean.2
+                );
+            }
+        }
+    }
+
     #[test]
     fn radius_bias_is_bounded_and_its_sigma_is_honest() {
         // A physical rim (the renderer integrates it over each pixel), 12 noise draws at the
-        // realistic tier's noise and the hard tier's. The half-level rule reads a Lambert limb's
-        // edge short: measured −0.034 to −0.036 px with the light straight above, −0.003 to
-        // −0.006 px oblique, whatever the noise. The stated sigma (blocks of rays) is 0.84–1.17
-        // of the draws' scatter here (the rays' own scatter over their number: 0.90–1.35); on
-        // the synthetic sets' discs, where streaks touch the rim, the blocks say 1.3–1.5 × more.
-        for (k, l) in LIGHTS.into_iter().enumerate() {
+        // realistic tier's noise and the hard tier's. With the shading's bias taken off
+        // ([`shading_bias`]) the mean radius error is +0.002 to +0.007 px (session 40; the
+        // half-level rule alone read −0.034 to −0.036 px with the light straight above, −0.003
+        // to −0.006 px oblique). The stated sigma (blocks of rays) is 0.54–0.98 of the draws'
+        // scatter here: the model also takes off the part of the rule's bias that follows the
+        // disc's phase on the pixel grid, which the rays' scatter still holds (0.84–1.17 before);
+        // on the synthetic sets' discs, where streaks touch the rim, the blocks say more.
+        for l in LIGHTS {
             for noise in [0.3, 1.0] {
                 let runs: Vec<(f64, Disc)> = (1..=12u64)
                     .map(|s| {
@@ -990,17 +1304,13 @@ mod tests {
                 let sd =
                     (runs.iter().map(|r| (r.0 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
                 let stated = runs.iter().map(|r| r.1.sigma_r).sum::<f64>() / n;
-                let (lo, hi) = if k == 0 {
-                    (-0.045, -0.025)
-                } else {
-                    (-0.015, 0.003)
-                };
+                let (lo, hi) = (-0.005, 0.012);
                 assert!(
                     (lo..=hi).contains(&mean),
                     "light {l:?} noise {noise}: mean radius error {mean:+.4} px outside [{lo}, {hi}]"
                 );
                 assert!(
-                    (0.6..=1.6).contains(&(sd / stated)),
+                    (0.45..=1.6).contains(&(sd / stated)),
                     "light {l:?} noise {noise}: scatter {sd:.4} px against stated {stated:.4} px"
                 );
             }
