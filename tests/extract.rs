@@ -1268,7 +1268,9 @@ fn an_object_streak_must_have_its_waiting_discs_colour() {
     assert_declined_photo(&shot, &t[&shot.file], 10.65);
     assert!(
         shot.reason.contains("another colour than the disc")
-            || shot.reason.contains("too uncertain to read the shot without it"),
+            || shot
+                .reason
+                .contains("too uncertain to read the shot without it"),
         "{}",
         shot.reason
     );

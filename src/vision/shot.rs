@@ -2562,8 +2562,8 @@ fn read_body(
         );
     }
     let used_blocks = blocks.is_some();
-    // The disc's centre and radius with the edge rule's shading bias taken off: what the fit
-    // holds `O` and `R` to. The scene was read around the circle itself, so every decision
+    // The disc's centre and radius with the edge rule's shading bias taken off (small balls,
+    // `disc::SHADING_BIAS_R_MAX`): what the fit holds `O` and `R` to. The scene was read around the circle itself, so every decision
     // before the fit stands as it was (taken off the circle before the reading, the same
     // correction turned a dozen readings of the 100 sets wrong and as many right, thresholds crossed by
     // hundredths of a pixel). Not for a crept ball, whose half circles the model does not
