@@ -672,8 +672,8 @@ pub fn refine_excluding(
 /// ball resting by it, the highlight: the lamp fitted to the 34 discs of one mixed-spin set
 /// scattered by ±0.2 in slant, and that set's psi went from 0.015° to 0.025° median with it).
 /// Session 40: six clean steel sets (R ≈ 44 px, seeds 4001–4006) read psi 0.061, 0.075, 0.053,
-/// 0.104, 0.056, 0.065° median without it and 0.039, 0.049, 0.049, 0.092, 0.039, 0.028° with it;
-/// on the billiard balls of the 100 sets (R ≈ 95–104 px) it moved nothing beyond the noise.
+/// 0.104, 0.056, 0.065° median without it and 0.039, 0.049, 0.049, 0.092, 0.039, 0.028° with it.
+/// On billiard balls (R ≈ 95–104 px) the clean sets' psi moved within its noise with it.
 pub const SHADING_BIAS_R_MAX: f64 = 60.0;
 
 /// How far [`refine`] reads the disc `d` off under its own shading, `(dx, dy, dr)` px, to be
@@ -700,7 +700,7 @@ struct Shading {
     b: f64,
     l: [f64; 3],
     /// The level where the photo's channels clip (a waiting disc saturated but for its limb),
-    /// over the cloth's: the highest light inside the disc.
+    /// over the cloth's: the 99.5th percentile of the light inside the disc.
     clip: f64,
 }
 
@@ -724,10 +724,11 @@ const SHADING_STEP: f64 = 0.25;
 
 /// The [`Shading`] of the disc `(cx, cy, r)` from its pixels: the cloth's level from a ring at
 /// 1.25–1.45 R, and `a`, `b` by least squares for each lamp direction of a grid (the best, then
-/// finer grids around it), from the pixels inside `r - 2` (the rim's pixels are what the edge
-/// rule reads; the shading is measured where the edge is not). Pixels more than 3 robust sigmas
-/// off the first fit (a highlight, a mark on the ball, a streak across it) are left out of the
-/// finer ones. `None` when the disc has too few pixels or no lamp light (`b ≤ 0`).
+/// finer grids around it), from the pixels inside `r - 1.5` (the rim's pixels are what the edge
+/// rule reads; the shading is measured where the edge is not), leaving out those within 2 noise
+/// sigmas of the clip level. Pixels more than 3 robust sigmas off the first fit (a highlight, a
+/// mark on the ball, a streak across it) are left out of the finer ones. `None` when the disc
+/// has too few such pixels or no lamp light (`b ≤ 0`).
 fn fit_shading(
     sample: &impl Fn(f64, f64) -> Option<f32>,
     (cx, cy, r): (f64, f64, f64),

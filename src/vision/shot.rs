@@ -2563,11 +2563,11 @@ fn read_body(
     }
     let used_blocks = blocks.is_some();
     // The disc's centre and radius with the edge rule's shading bias taken off (small balls,
-    // `disc::SHADING_BIAS_R_MAX`): what the fit holds `O` and `R` to. The scene was read around the circle itself, so every decision
-    // before the fit stands as it was (taken off the circle before the reading, the same
-    // correction turned a dozen readings of the 100 sets wrong and as many right, thresholds crossed by
-    // hundredths of a pixel). Not for a crept ball, whose half circles the model does not
-    // describe.
+    // `disc::SHADING_BIAS_R_MAX`): what the fit holds `O` and `R` to. The scene was read around
+    // the circle itself, so every decision before the fit stands as it was (taken off the
+    // circle before the reading, the same correction turned a dozen readings of the 100 sets
+    // wrong and as many right, thresholds crossed by hundredths of a pixel). Not for a crept
+    // ball, whose half circles the model does not describe.
     let bias = if creep.is_none() {
         disc::shading_bias(sig, &dsc).unwrap_or_default()
     } else {
@@ -2794,7 +2794,7 @@ fn read_body(
     // where the streaks overlap near the impact): it is reported as undefined, with the reason.
     // 10° until session 40: over the 100 sets, 6 of the 16 `theta1` readings stated at 5–10°
     // were 27–70° off (a rolling line of a few samples whose fit has more than one valley, where
-    // the curvature's sigma says nothing), against none of those stated below 5° but one.
+    // the curvature's sigma says nothing), against 1 of the 6 stated at 3–5°.
     let unresolved = UNRESOLVED_DEG.to_radians();
     let mut notes: Vec<String> = Vec::new();
     if let Some(q) = &creep {
