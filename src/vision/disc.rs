@@ -31,7 +31,9 @@
 //! ([`companion`]): each is then refined from its half facing away from the other
 //! ([`refine_excluding`]), whose rim is clear of the band the ball swept between them.
 
-use super::background::{Signal, box_blur, mahalanobis_norm, median, median_of, smoothed_channels};
+use super::background::{
+    Signal, box_blur, mad_sigma_about, mahalanobis_norm, median, median_of, smoothed_channels,
+};
 use nalgebra::{Matrix3, Vector3};
 
 #[derive(Debug, Clone)]
@@ -745,14 +747,9 @@ fn fit_shading(
     if ring.len() < 64 {
         return None;
     }
-    let cloth = median(&mut ring) as f64;
-    let noise = 1.4826
-        * median(
-            &mut ring
-                .iter()
-                .map(|v| (*v as f64 - cloth).abs() as f32)
-                .collect::<Vec<_>>(),
-        ) as f64;
+    let cloth = median(&mut ring);
+    let noise = mad_sigma_about(&ring, cloth) as f64;
+    let cloth = cloth as f64;
     // Pixel centres inside `r - 1.5`, every `stride`-th row and column: some 3,000 to 6,000.
     let stride = ((r / 40.0).round() as usize).max(1);
     let inner = r - 1.5;
@@ -834,13 +831,13 @@ fn fit_shading(
         .iter()
         .map(|(nv, y)| (y - a0 - b0 * (nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2]).max(0.0)) as f32)
         .collect();
-    let mut abs: Vec<f32> = res
+    let kept: Vec<f32> = res
         .iter()
         .zip(&unclipped)
         .filter(|(_, u)| **u)
-        .map(|(v, _)| v.abs())
+        .map(|(v, _)| *v)
         .collect();
-    let s = 1.4826 * median(&mut abs) as f64;
+    let s = mad_sigma_about(&kept, 0.0) as f64;
     let keep: Vec<bool> = res
         .iter()
         .zip(&unclipped)

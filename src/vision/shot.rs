@@ -2117,7 +2117,8 @@ fn read_body(
     } = sel;
     *used_narrow = narrow.iter().any(|n| *n);
     out.streaks = kept.iter().map(|t| (Role::Unused, t.clone())).collect();
-    let mut cue_stopped = match kept.len() {
+    // Two streaks: the cue ball's own path after the impact is missing.
+    let two_streaks = match kept.len() {
         0 => {
             out.reason = "no streak found: no collision recorded".into();
             return out;
@@ -2174,7 +2175,7 @@ fn read_body(
         &check_colours,
         o,
         r,
-        cue_stopped,
+        two_streaks,
         throw_reading,
     );
     let creep_reading = match &scene {
@@ -2188,7 +2189,7 @@ fn read_body(
     // hidden beside it (cut where it runs within the other streak's margin). The scene is then
     // read as with two streaks, the others left unused.
     let scene = match scene {
-        Err(e) if !cue_stopped && creep_reading.is_none() => {
+        Err(e) if !two_streaks && creep_reading.is_none() => {
             match read_scene(&kept, &likeness, &check_colours, o, r, true, throw_reading) {
                 Ok(rd) => {
                     if debug {
@@ -2197,7 +2198,6 @@ fn read_body(
                             kept.len()
                         );
                     }
-                    cue_stopped = true;
                     Ok(rd)
                 }
                 Err(_) => Err(e),
@@ -2219,7 +2219,6 @@ fn read_body(
             (o, r) = ((dsc.cx, dsc.cy), dsc.r);
             out.ball_radius_px = Some(r);
             out.disc = Some(dsc.clone());
-            cue_stopped = false;
             let q = vec![Sample {
                 x: c.q.cx,
                 y: c.q.cy,
@@ -2245,6 +2244,8 @@ fn read_body(
             return out;
         }
     };
+    // The reading has no cue ball's path out of `P`: two streaks, or a third that fits no role.
+    let cue_stopped = reading.b1.is_none();
     // Only two streaks: the cue ball's own path after the impact is missing. Either it stopped
     // (a ball rests at P), or its path was not found: hidden along the other streaks, or short
     // and leaving P across them. Without light at P it is the latter, and the reading is held to
@@ -2566,7 +2567,7 @@ fn read_body(
     // `disc::SHADING_BIAS_R_MAX`): what the fit holds `O` and `R` to. The scene was read around
     // the circle itself, so every decision before the fit stands as it was (taken off the
     // circle before the reading, the same correction turned a dozen readings of the 100 sets
-    // wrong and as many right, thresholds crossed by hundredths of a pixel). Not for a crept
+    // wrong and nine right, thresholds crossed by hundredths of a pixel). Not for a crept
     // ball, whose half circles the model does not describe.
     let bias = if creep.is_none() {
         disc::shading_bias(sig, &dsc).unwrap_or_default()
