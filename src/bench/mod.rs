@@ -1,6 +1,7 @@
 //! `streakfit bench speed-error`: what each unit of speed costs in accuracy; `streakfit bench
 //! psi-bound`: the best accuracy of `psi` that synthetic photos allow ([`crate::synth::bound`]);
-//! `streakfit bench stability`: the extractor's decision noise ([`stability`]).
+//! `streakfit bench stability`: the extractor's decision noise ([`stability`]); `streakfit bench
+//! stages`: where the extractor's time goes, stage by stage ([`stages`]).
 //!
 //! On a pinned (seeded) synthetic set with ground truth, every cost knob of a stage is swept and
 //! each setting's seconds per item and angle errors are recorded:
@@ -19,6 +20,7 @@
 //! `OUT/pareto.png|svg` (time against median error per stage, default marked).
 
 pub mod stability;
+pub mod stages;
 
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::physics::{Coefficients, RegimeChoice, Shot, closed, impulse};
@@ -44,6 +46,9 @@ pub enum BenchKind {
     /// How far the extractor's readings move when its input moves far less than the sensor's
     /// noise: status, path-model and angle changes, and misreadings per run against truth.csv.
     Stability(stability::StabilityArgs),
+    /// Where the extractor's time goes: each photo decoded and analysed on one thread, the
+    /// analysis split into its stages' exclusive times (mean ms per photo and share).
+    Stages(stages::StagesArgs),
 }
 
 #[derive(Debug, Args, Clone)]
@@ -1041,6 +1046,7 @@ pub fn run(args: &BenchArgs) -> CliResult {
     match &args.kind {
         BenchKind::PsiBound(a) => psi_bound(a),
         BenchKind::Stability(a) => stability::run(a),
+        BenchKind::Stages(a) => stages::run(a),
         BenchKind::SpeedError(a) => {
             let rows = speed_error(a)?;
             println!(

@@ -28,7 +28,8 @@
 //! - [`arc`]: the cue ball's start tangent `delta1` from the pixels around the impact, where its
 //!   short sliding arc overlaps the incoming streak (a dwell-time model of the light, fitted);
 //! - [`shot`]: scene reading (which streak is which ball) and the whole per-image analysis;
-//! - [`overlay`]: drawings that show why each number is what it is.
+//! - [`overlay`]: drawings that show why each number is what it is;
+//! - [`stages`]: each stage's share of an analysis's time (`streakfit bench stages`).
 //!
 //! Frame (see `shared/PHYSICS.md`): `x` points from the cue ball's centre at impact `P` to the
 //! object ball's centre `O`, with `P = O - 2R x̂` on the incoming centre-line; the scene is mirrored
@@ -53,6 +54,7 @@ pub mod linefit;
 pub mod overlay;
 pub mod pathfit;
 pub mod shot;
+pub mod stages;
 pub mod streak;
 pub mod texture;
 

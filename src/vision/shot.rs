@@ -35,6 +35,7 @@ use super::disc::{self, Disc};
 use super::image_io::RgbImage;
 use super::linefit;
 use super::pathfit::{self, JointFit, Problem};
+use super::stages;
 use super::streak::{self, KeepOut, Sample};
 use crate::physics::wrap;
 use crate::table::Status;
@@ -1370,6 +1371,7 @@ pub fn analyse(
     scene_radius_px: Option<f64>,
     opts: &AnalysisOptions,
 ) -> Analysis {
+    let cloth_stage = stages::enter("cloth model");
     let coarse = background::CoarsePhoto::of(img, cloth, opts.coarse_side);
     if coarse.saturated > opts.max_saturated.unwrap_or(0.05) {
         return Analysis::declined(
@@ -1384,7 +1386,9 @@ pub fn analyse(
         Ok(s) => s,
         Err(e) => return Analysis::declined(Status::Declined, e),
     };
-    let mut a = match disc::find_candidates(&sig, DISC_CANDIDATES) {
+    drop(cloth_stage);
+    let found = stages::within("discs", || disc::find_candidates(&sig, DISC_CANDIDATES));
+    let mut a = match found {
         Err(e) => Analysis::declined(Status::Declined, e),
         Ok(cands) => read_candidates(&sig, &cands, scene_radius_px, opts),
     };
@@ -1398,7 +1402,10 @@ pub fn analyse(
     // right row, hard seed 101 shot_022, none wrong on 29 sets, 2–6 % on hard folders.)
     if a.status != Status::Ok && a.disc.is_none() {
         let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
-        for (cd, u) in disc::find_colour_candidates(&sig, COLOUR_CANDIDATES) {
+        let colour_discs = stages::within("discs", || {
+            disc::find_colour_candidates(&sig, COLOUR_CANDIDATES)
+        });
+        for (cd, u) in colour_discs {
             let cos: f32 = (0..3).map(|c| u[c] * sig.u[c]).sum();
             if debug {
                 eprintln!(
@@ -1410,8 +1417,10 @@ pub fn analyse(
             if cos > OTHER_COLOUR_MAX_COS {
                 continue;
             }
-            let sig_d = sig.recoloured(u);
-            let Ok(cands) = disc::find_candidates(&sig_d, DISC_CANDIDATES) else {
+            let sig_d = stages::within("cloth model", || sig.recoloured(u));
+            let Ok(cands) =
+                stages::within("discs", || disc::find_candidates(&sig_d, DISC_CANDIDATES))
+            else {
                 continue;
             };
             let b = read_candidates(&sig_d, &cands, scene_radius_px, opts);
@@ -1445,6 +1454,7 @@ fn refine_to_scale(
     cd: &disc::CoarseDisc,
     scene_radius_px: Option<f64>,
 ) -> Result<Disc, String> {
+    let _stage = stages::enter("discs");
     let in_scale = |d: &Disc, rc: f64| DISC_SCALE_RATIO.contains(&(d.r / rc));
     let fine = disc::refine(sig, cd);
     let Some(rc) = scene_radius_px else {
@@ -1969,7 +1979,7 @@ fn read_from_disc(
             dsc.cx, dsc.cy, dsc.r, dsc.contrast
         );
     }
-    let mut tracks = DiscTracks::new(sig, &dsc, opts);
+    let mut tracks = stages::within("streak tracking", || DiscTracks::new(sig, &dsc, opts));
     let mut narrow = false;
     let a = read_body(
         sig,
@@ -2073,6 +2083,7 @@ impl DiscTracks {
 
     /// The ring's tracks followed by the faint ones.
     fn with_faint(&mut self, sig: &Signal, r: f64, opts: &AnalysisOptions) -> Vec<Tracked> {
+        let _stage = stages::enter("streak tracking");
         let (map, ring, ko) = (&self.map, &self.ring, self.ko);
         let faint = self.faint.get_or_insert_with(|| {
             let found = streak::find_faint(map, ko.ox, ko.oy, ring);
@@ -2095,6 +2106,7 @@ fn read_body(
     allow_narrow: bool,
     used_narrow: &mut bool,
 ) -> Analysis {
+    let _stage = stages::enter("scene reading and checks");
     let mut out = Analysis::declined(Status::Declined, "");
     out.ball_radius_px = Some(dsc.r);
     let (mut o, mut r) = ((dsc.cx, dsc.cy), dsc.r);
@@ -2309,6 +2321,7 @@ fn read_body(
         .into_iter()
         .flatten()
         .collect();
+    let remeasure_stage = stages::enter("centre-lines re-measured");
     let mut measured: Vec<Vec<Sample>> = kept.clone();
     // Other balls' light around streak `a`: bands around their centre-lines and the discs.
     let exclusion_for = |a: usize| {
@@ -2533,6 +2546,8 @@ fn read_body(
     }
     // The incoming line from its pixels, block by block (`linefit`): at a few grey levels of
     // contrast the profile-by-profile samples scatter several times their sigma.
+    drop(remeasure_stage);
+    let blocks_stage = stages::enter("incoming blocks, disc shading");
     let t_blocks = std::time::Instant::now();
     // The incoming samples' robust line: the blocks' start, and the joint fit's on the samples.
     let inc_line = fit_line(&measured[reading.inc]);
@@ -2598,6 +2613,8 @@ fn read_body(
         }
         let _ = std::fs::write(path, txt);
     }
+    drop(blocks_stage);
+    let fit_stage = stages::enter("joint path fit");
     let settings = pathfit::FitSettings {
         line_only: opts.path_models == PathModels::LineOnly,
         ..opts.fit
@@ -2659,6 +2676,7 @@ fn read_body(
     // The overlay shows the incoming samples the line was fitted to (blocks or profiles): the
     // fit's inlier flags index them.
     out.streaks[reading.inc].1 = pb.incoming.clone();
+    drop(fit_stage);
     let Some(fit) = fit else {
         out.reason = "path fit failed (too few consistent centre-line points)".into();
         return out;
@@ -2872,7 +2890,7 @@ fn read_body(
         let t_arc = std::time::Instant::now();
         let fitted =
             (opts.arc_pixels && opts.path_models == PathModels::Auto && short_line.is_none())
-                .then(|| arc::fit(sig, cue_u, &geometry));
+                .then(|| stages::within("arc fit", || arc::fit(sig, cue_u, &geometry)));
         if let Some(Err(arc::ArcMiss::Hidden(l0))) = fitted {
             // The pixels near P are the better witness of the start tangent (see the rivals
             // below): when the turn hides in the cue ball's footprint, the centre-line fit's
