@@ -1255,6 +1255,70 @@ fn the_stability_bench_reads_as_extract_does() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `bench stages` analyses a folder as `extract` does and splits each analysis into its stages:
+/// one CSV row per photo with `extract`'s status, every stage's time non-negative and their sum
+/// the analysis's whole time (no stage counted twice, none lost). Three clean photos with their
+/// plate at 1200×800; a `.parquet` output is bad usage (exit 2).
+#[test]
+fn the_stages_bench_splits_each_analysis_into_stages_that_add_up() {
+    let dir = scratch("stages");
+    synth(&dir, "clean", 3, 5, &["--background"]);
+    let (_, rows) = extract_errors(&dir, 3, &[]);
+    let csv = dir.join("stages.csv");
+    let o = Command::new(bin())
+        .args(["bench", "stages"])
+        .arg(&dir)
+        .arg("--out")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(text.starts_with("3 photos, one thread"), "{text}");
+    assert!(text.contains("\narc fit "), "{text}");
+    assert!(text.contains("\nanalysis / decode: "), "{text}");
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = table.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(&head[..4], &["file", "status", "decode_ms", "analysis_ms"]);
+    for s in [
+        "cloth_model",
+        "discs",
+        "streak_tracking",
+        "joint_path_fit",
+        "arc_fit",
+    ] {
+        assert!(head.contains(&s), "{head:?}");
+    }
+    let body: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(body.len(), 3);
+    for (cells, row) in body.iter().zip(&rows) {
+        assert_eq!(cells[0], row.file);
+        assert_eq!(cells[1], row.status.as_str());
+        let ms: Vec<f64> = cells[2..].iter().map(|c| c.parse().unwrap()).collect();
+        assert!(ms.iter().all(|v| *v >= 0.0), "{cells:?}");
+        let (analysis, stages) = (ms[1], ms[2..].iter().sum::<f64>());
+        // The stages are booked from inside the analysis; the whole is timed around it.
+        assert!(
+            stages <= analysis + 0.01 && stages > 0.95 * analysis,
+            "{stages} of {analysis}: {cells:?}"
+        );
+    }
+    let bad = Command::new(bin())
+        .args(["bench", "stages"])
+        .arg(&dir)
+        .arg("--out")
+        .arg(dir.join("stages.parquet"))
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn an_object_streak_must_have_its_waiting_discs_colour() {
     // Fresh realistic seed 707's shot_021 (rubber, psi 10.65°): a white cue ball and a coloured
