@@ -3390,6 +3390,36 @@ mod tests {
         }
     }
 
+    /// Recording the stages' times (`streakfit bench stages`) changes nothing the analysis
+    /// reads, to the bit, and books the time to the stages it ran through.
+    #[test]
+    fn recording_the_stages_changes_nothing_the_analysis_reads() {
+        let a = thrown(3.0, None);
+        let (b, times) = super::stages::record(|| thrown(3.0, None));
+        assert_eq!(a.status, Status::Ok, "{}", a.reason);
+        assert_eq!((a.status, &a.reason), (b.status, &b.reason));
+        for (x, y) in [
+            (a.psi_deg, b.psi_deg),
+            (a.psi_err_deg, b.psi_err_deg),
+            (a.theta1_deg, b.theta1_deg),
+            (a.theta2_deg, b.theta2_deg),
+        ] {
+            assert_eq!(x.map(f64::to_bits), y.map(f64::to_bits));
+        }
+        let names: Vec<&str> = times.iter().map(|(n, _)| *n).collect();
+        for stage in [
+            "cloth model",
+            "discs",
+            "streak tracking",
+            "scene reading and checks",
+            "centre-lines re-measured",
+            "joint path fit",
+        ] {
+            assert!(names.contains(&stage), "{stage} not in {names:?}");
+        }
+        assert!(times.iter().all(|(_, ms)| *ms >= 0.0), "{times:?}");
+    }
+
     /// An `ok` analysis whose joint fit settled on ball radius `r` (px).
     fn fitted(r: f64) -> Analysis {
         let mut a = Analysis::declined(Status::Ok, "");
