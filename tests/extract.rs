@@ -1216,6 +1216,24 @@ fn the_overlay_draws_the_arc_that_gives_delta1() {
     assert!(orange, "no arc drawn at {mid:?}");
 }
 
+/// `streakfit bench KIND DIR FLAGS... OUT`, which must succeed: its standard output.
+fn bench_ok(kind: &str, dir: &Path, flags: &[&str], out: &Path) -> String {
+    let o = Command::new(bin())
+        .args(["bench", kind])
+        .arg(dir)
+        .args(flags)
+        .arg(out)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    text
+}
+
 /// `bench stability` reads a folder as `extract` does: its decoded run's table is `extract`'s
 /// (every column but `seconds`), each perturbed run gives a row per photo, and the summary counts
 /// them. Three clean photos with their plate at 1200×800, one perturbation.
@@ -1225,19 +1243,7 @@ fn the_stability_bench_reads_as_extract_does() {
     synth(&dir, "clean", 3, 5, &["--background"]);
     let (_, rows) = extract_errors(&dir, 3, &[]);
     let out = dir.join("stability");
-    let o = Command::new(bin())
-        .args(["bench", "stability"])
-        .arg(&dir)
-        .args(["--perturbations", "1", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(
-        o.status.success(),
-        "{text}{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let text = bench_ok("stability", &dir, &["--perturbations", "1", "--out"], &out);
     assert!(
         text.starts_with("3 photos, 3 perturbed analyses (each decoded value ± 1e-6"),
         "{text}"
@@ -1265,19 +1271,7 @@ fn the_stages_bench_splits_each_analysis_into_stages_that_add_up() {
     synth(&dir, "clean", 3, 5, &["--background"]);
     let (_, rows) = extract_errors(&dir, 3, &[]);
     let csv = dir.join("stages.csv");
-    let o = Command::new(bin())
-        .args(["bench", "stages"])
-        .arg(&dir)
-        .arg("--out")
-        .arg(&csv)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(
-        o.status.success(),
-        "{text}{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let text = bench_ok("stages", &dir, &["--out"], &csv);
     assert!(text.starts_with("3 photos, one thread"), "{text}");
     assert!(text.contains("\narc fit "), "{text}");
     assert!(text.contains("\nanalysis / decode: "), "{text}");
