@@ -1314,6 +1314,26 @@ fn the_stages_bench_splits_each_analysis_into_stages_that_add_up() {
 }
 
 #[test]
+fn two_resting_balls_read_by_the_only_story_the_streaks_tell() {
+    // Near head-on realistic seed 929's shot_019 (steel, psi 6.50°, a stun shot): the cue ball
+    // rests by the object ball's waiting disc, and the time arrows lean only weakly the right
+    // way (+1.8 ± 4.5 % per R). Until session 41 the roles were swapped to try the other
+    // resting ball as the object ball, and when that reading found no scene at all (only one
+    // streak meets that ball) the shot was declined with that reading's reason. Now the first
+    // reading, the only one that explains the streaks, stands where its arrows lean its way.
+    ok_of_24(
+        "only_story",
+        929,
+        NEAR_HEAD_ON_MIXED,
+        "shot_019.jpg",
+        6.50,
+        "cue ball comes to rest near the impact (a stun or draw shot): delta1, theta1 \
+         undefined; the roles of the two resting balls from the only reading that explains the \
+         streaks (the object ball brightens +1.8 ± 4.5 % per R",
+    );
+}
+
+#[test]
 fn an_object_streak_must_have_its_waiting_discs_colour() {
     // Fresh realistic seed 707's shot_021 (rubber, psi 10.65°): a white cue ball and a coloured
     // object ball. Until session 31 it was read `ok` with psi 14.50° ± 0.69° and `theta2`

@@ -1076,6 +1076,16 @@ fn median_amp(samples: &[Sample]) -> f64 {
 /// `theta2` 0.8–1.6° off at stated 0.2–0.5°).
 const ARROW_SIGNIFICANCE: f64 = 2.0;
 
+/// Least lean of the time arrows (object ball's brightening less the incoming one's, in its
+/// standard errors) by which a reading of two resting balls stands when swapping their roles
+/// reads no scene at all (no incoming streak meets the other ball): then no other story of the
+/// streaks exists, and arrows that lean the other way say the roles are the reverse anyway
+/// (the other ball's streaks hidden). Session 41, 100 synthetic sets: of the 12 readings that
+/// the swap's failure would have left standing, the 6 with arrows above 0 are right (lean
+/// 0.39–1.73); below it 3 right and 3 whose streaks' roles were swapped (`theta2` 2.7–3.4° off
+/// at a stated 0.03–0.5°; lean −3.5 to −0.36). Until session 41 all were declined.
+const ARROWS_ALONE_LEAN: f64 = 0.0;
+
 /// Largest brightening per ball radius away from P ([`time_arrow`]) of a streak read as the
 /// incoming one. An arriving ball is faster the farther back it was, so its light fades away
 /// from P (−0.1 to −0.6 % per R on clean synthetic sets); illumination gradients and vignetting
@@ -2387,6 +2397,8 @@ fn read_body(
     // A cue ball resting against the object ball: a white cue ball is the brighter disc, and
     // the light alone is symmetric in time (a ball arrives and stops, the other leaves), except
     // that the object ball leaves sliding and so brightens away from its disc.
+    // Why the roles of two resting balls stand on weak time arrows, for the reason.
+    let mut arrow_note: Option<String> = None;
     if cue_at_rest {
         let obj = time_arrow(sig, &measured[reading.b2], o, r);
         // A ball waiting for the impact leaves at full speed and only slows down: the light of
@@ -2487,7 +2499,35 @@ fn read_body(
                     match rest {
                         _ if beside_rest.is_some_and(|v| v > SLOW_LIGHT_MAX) => None,
                         Some(d) => {
-                            return read_from_disc(sig, d, opts, Some(Swapped::Arrows(diff, se)));
+                            let b = read_from_disc(sig, d, opts, Some(Swapped::Arrows(diff, se)));
+                            // Where the other resting ball reads no scene at all (no incoming
+                            // streak meets it), this reading is the only story the streaks
+                            // tell, and it stands if its arrows lean its way
+                            // ([`ARROWS_ALONE_LEAN`]).
+                            let physical = b.streaks.iter().any(|s| s.0 == Role::Incoming);
+                            if b.status == Status::Ok || physical {
+                                return b;
+                            }
+                            if diff > ARROWS_ALONE_LEAN * se {
+                                arrow_note = Some(format!(
+                                    "the roles of the two resting balls from the only reading \
+                                     that explains the streaks (the object ball brightens \
+                                     {:+.1} ± {:.1} % per R more than the incoming streak)",
+                                    100.0 * diff,
+                                    100.0 * se
+                                ));
+                                None
+                            } else {
+                                Some(format!(
+                                    "cannot tell which resting ball is the object ball (the \
+                                     object ball brightens away from its disc by {:+.1} ± \
+                                     {:.1} % per R more than the incoming streak, and the other \
+                                     resting ball reads no scene: {})",
+                                    100.0 * diff,
+                                    100.0 * se,
+                                    b.reason
+                                ))
+                            }
                         }
                         None => Some(format!(
                             "the streak read as the object ball's does not clearly slow down \
@@ -2816,6 +2856,7 @@ fn read_body(
     // the curvature's sigma says nothing), against 1 of the 6 stated at 3–5°.
     let unresolved = UNRESOLVED_DEG.to_radians();
     let mut notes: Vec<String> = Vec::new();
+    notes.extend(arrow_note);
     if let Some(q) = &creep {
         notes.push(format!(
             "the object ball crept {:.2} R and stopped: its path is the line from its waiting to \
