@@ -2379,6 +2379,7 @@ fn read_body(
     for (i, s) in out.streaks.iter_mut().enumerate() {
         s.1 = measured[i].clone();
     }
+    drop(remeasure_stage);
     // The incoming ball rolls towards P, faster the farther back it was: its light cannot grow
     // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
     // the incoming streak when the real one is too faint to find).
@@ -2394,11 +2395,11 @@ fn read_body(
         );
         return out;
     }
+    // Why the roles of two resting balls stand on weak time arrows, for the reason.
+    let mut arrow_note: Option<String> = None;
     // A cue ball resting against the object ball: a white cue ball is the brighter disc, and
     // the light alone is symmetric in time (a ball arrives and stops, the other leaves), except
     // that the object ball leaves sliding and so brightens away from its disc.
-    // Why the roles of two resting balls stand on weak time arrows, for the reason.
-    let mut arrow_note: Option<String> = None;
     if cue_at_rest {
         let obj = time_arrow(sig, &measured[reading.b2], o, r);
         // A ball waiting for the impact leaves at full speed and only slows down: the light of
@@ -2586,7 +2587,6 @@ fn read_body(
     }
     // The incoming line from its pixels, block by block (`linefit`): at a few grey levels of
     // contrast the profile-by-profile samples scatter several times their sigma.
-    drop(remeasure_stage);
     let blocks_stage = stages::enter("incoming blocks, disc shading");
     let t_blocks = std::time::Instant::now();
     // The incoming samples' robust line: the blocks' start, and the joint fit's on the samples.
