@@ -10,7 +10,7 @@
 //! Printed: per stage, the mean milliseconds per photo and its share of the analysis; the mean
 //! decode, the mean analysis and their ratio (the target is at most 1). With `--out`,
 //! `FILE.csv` holds one row per photo: `file, status, decode_ms, analysis_ms` and one column
-//! per stage (ms).
+//! per stage (ms), named by the stage with `_` for its spaces and commas.
 
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::extract::{
@@ -98,7 +98,7 @@ fn write_csv(photos: &[PhotoTimes], path: &std::path::Path) -> anyhow::Result<()
     let names = stage_names(photos);
     let mut text = String::from("file,status,decode_ms,analysis_ms");
     for n in &names {
-        text += &format!(",{}", n.replace([' ', ','], "_"));
+        text += &format!(",{}", n.replace(", ", "_").replace([' ', ','], "_"));
     }
     text.push('\n');
     for p in photos {
