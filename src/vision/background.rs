@@ -77,7 +77,12 @@ pub struct Signal<'a> {
 /// The pixel `(x0, y0)` whose cell holds `(x, y)` in a `w × h` image, and the fractions across
 /// it; `None` where a bilinear sample would need a pixel outside.
 #[inline]
-fn bilinear_cell(x: f64, y: f64, w: usize, h: usize) -> Option<(usize, usize, f32, f32)> {
+pub(crate) fn bilinear_cell(
+    x: f64,
+    y: f64,
+    w: usize,
+    h: usize,
+) -> Option<(usize, usize, f32, f32)> {
     if !(x >= 0.0 && y >= 0.0) {
         return None;
     }

@@ -32,7 +32,8 @@
 //! ([`refine_excluding`]), whose rim is clear of the band the ball swept between them.
 
 use super::background::{
-    Signal, box_blur, mad_sigma_about, mahalanobis_norm, median, median_of, smoothed_channels,
+    Signal, bilinear_cell, box_blur, mad_sigma_about, mahalanobis_norm, median, median_of,
+    smoothed_channels,
 };
 use nalgebra::{Matrix3, Vector3};
 
@@ -909,15 +910,7 @@ fn shading_bias_on(
         }
     }
     let model = |x: f64, y: f64| -> Option<f32> {
-        let (fx, fy) = (x - ox as f64, y - oy as f64);
-        if !(fx >= 0.0 && fy >= 0.0) {
-            return None;
-        }
-        let (i, j) = (fx as usize, fy as usize);
-        if i + 1 >= n || j + 1 >= n {
-            return None;
-        }
-        let (tx, ty) = ((fx - i as f64) as f32, (fy - j as f64) as f32);
+        let (i, j, tx, ty) = bilinear_cell(x - ox as f64, y - oy as f64, n, n)?;
         let v = |i: usize, j: usize| img[j * n + i];
         Some(
             (1.0 - ty) * ((1.0 - tx) * v(i, j) + tx * v(i + 1, j))

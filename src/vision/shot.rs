@@ -238,6 +238,12 @@ pub struct Analysis {
 }
 
 impl Analysis {
+    /// Whether the streaks were given roles at all (an incoming streak meets the disc): the
+    /// scene was read, whatever became of the reading.
+    fn has_reading(&self) -> bool {
+        self.streaks.iter().any(|s| s.0 == Role::Incoming)
+    }
+
     fn declined(status: Status, reason: impl Into<String>) -> Self {
         Self {
             status,
@@ -1689,8 +1695,10 @@ fn read_candidates(
         if a.status == Status::Ok {
             continue;
         }
-        let physical = |a: &Analysis| a.streaks.iter().any(|s| s.0 == Role::Incoming);
-        if first.as_ref().is_none_or(|f| physical(&a) && !physical(f)) {
+        if first
+            .as_ref()
+            .is_none_or(|f| a.has_reading() && !f.has_reading())
+        {
             first = Some(a);
         }
     }
@@ -2060,6 +2068,9 @@ struct DiscTracks {
     faint: Option<Vec<Tracked>>,
     /// A second disc of the ball ([`disc::companion`]), searched for once.
     companion: Option<Option<disc::Companion>>,
+    /// The disc's shading bias ([`disc::shading_bias`]), measured once (the narrow margin's
+    /// second reading of the disc asks again).
+    shading_bias: Option<(f64, f64, f64)>,
 }
 
 impl DiscTracks {
@@ -2081,7 +2092,16 @@ impl DiscTracks {
             tracked,
             faint: None,
             companion: None,
+            shading_bias: None,
         }
+    }
+
+    /// The disc's shading bias, zero where the model does not describe it; measured at the
+    /// first call.
+    fn shading_bias(&mut self, sig: &Signal, dsc: &disc::Disc) -> (f64, f64, f64) {
+        *self
+            .shading_bias
+            .get_or_insert_with(|| disc::shading_bias(sig, dsc).unwrap_or_default())
     }
 
     /// The disc's companion, searched for at the first call.
@@ -2505,8 +2525,7 @@ fn read_body(
                             // streak meets it), this reading is the only story the streaks
                             // tell, and it stands if its arrows lean its way
                             // ([`ARROWS_ALONE_LEAN`]).
-                            let physical = b.streaks.iter().any(|s| s.0 == Role::Incoming);
-                            if b.status == Status::Ok || physical {
+                            if b.status == Status::Ok || b.has_reading() {
                                 return b;
                             }
                             if diff > ARROWS_ALONE_LEAN * se {
@@ -2625,7 +2644,7 @@ fn read_body(
     // wrong and nine right, thresholds crossed by hundredths of a pixel). Not for a crept
     // ball, whose half circles the model does not describe.
     let bias = if creep.is_none() {
-        disc::shading_bias(sig, &dsc).unwrap_or_default()
+        tracks.shading_bias(sig, &dsc)
     } else {
         (0.0, 0.0, 0.0)
     };
