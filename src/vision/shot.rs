@@ -3304,14 +3304,11 @@ mod tests {
     use crate::vision::background;
     use crate::vision::image_io::RgbImage as FloatImage;
 
-    /// Two balls of one colour (steel on steel): the streaks' colour likenesses to the disc
-    /// differ by hue noise only, and the geometry picks the reading. Fresh realistic seed 3601
-    /// shot_017's layout: the cue ball arrives from the right at psi 19°, the object ball
-    /// leaves 5.6° off the line of centres, the drawn cue ball rolls off at 121°. Its object
-    /// ball's streak had the lowest likeness (0.962 against 0.999 and 1.0), which swapped the
-    /// object ball's and the incoming streaks until the likeness had a tie margin.
-    #[test]
-    fn one_colour_pairs_are_read_by_their_geometry() {
+    /// Fresh realistic seed 3601 shot_017's layout as centre-line samples: the cue ball arrives
+    /// from the right at psi 19° (streak 1), the object ball leaves 5.6° off the line of
+    /// centres (streak 0), the drawn cue ball slides off at 80° and rolls on at 121° (streak
+    /// 2), its rolling line beside `P`; each streak's light is `amps[k]`.
+    fn drawn_cue_scene(amps: [f64; 3]) -> DrawnCue {
         let (r, o) = (47.7, (1400.0, 900.0));
         let rot = |d: (f64, f64), deg: f64| {
             let (s, c) = deg.to_radians().sin_cos();
@@ -3320,7 +3317,7 @@ mod tests {
         let d_in = (-1.0, 0.0);
         let n = rot(d_in, -19.0);
         let p = (o.0 - 2.0 * r * n.0, o.1 - 2.0 * r * n.1);
-        let along = |from: (f64, f64), d: (f64, f64), s0: f64, s1: f64| -> Vec<Sample> {
+        let along = |from: (f64, f64), d: (f64, f64), s0: f64, s1: f64, amp: f64| {
             let k = ((s1 - s0) / 8.0) as usize;
             (0..=k)
                 .map(|i| {
@@ -3329,24 +3326,44 @@ mod tests {
                         x: from.0 + t * d.0,
                         y: from.1 + t * d.1,
                         sigma: 0.3,
-                        amp: 0.05,
+                        amp,
                     }
                 })
-                .collect()
+                .collect::<Vec<Sample>>()
         };
-        // Samples run from the disc outward: the incoming streak away from P, against `d_in`.
-        let incoming = along(p, (-d_in.0, -d_in.1), 2.0 * r, 14.0 * r);
-        let object = along(o, rot(n, -5.6), 1.5 * r, 14.0 * r);
-        // The drawn cue ball slides off at 80° and rolls on at 121°: its rolling line passes
-        // beside P.
         let d80 = rot(n, 80.0);
-        let cue = along(
-            (p.0 + r * d80.0, p.1 + r * d80.1),
-            rot(n, 121.0),
-            r,
-            4.5 * r,
-        );
-        let streaks = vec![object, incoming, cue];
+        // Samples run from the disc outward: the incoming streak away from P, against `d_in`.
+        let streaks = vec![
+            along(o, rot(n, -5.6), 1.5 * r, 14.0 * r, amps[0]),
+            along(p, (-d_in.0, -d_in.1), 2.0 * r, 14.0 * r, amps[1]),
+            along(
+                (p.0 + r * d80.0, p.1 + r * d80.1),
+                rot(n, 121.0),
+                r,
+                4.5 * r,
+                amps[2],
+            ),
+        ];
+        DrawnCue { streaks, o, r, p }
+    }
+
+    /// [`drawn_cue_scene`]'s streaks, `O`, `R` and `P`.
+    struct DrawnCue {
+        streaks: Vec<Vec<Sample>>,
+        o: (f64, f64),
+        r: f64,
+        p: (f64, f64),
+    }
+
+    /// Two balls of one colour (steel on steel): the streaks' colour likenesses to the disc
+    /// differ by hue noise only, and the geometry picks the reading. Fresh realistic seed 3601
+    /// shot_017's layout: the cue ball arrives from the right at psi 19°, the object ball
+    /// leaves 5.6° off the line of centres, the drawn cue ball rolls off at 121°. Its object
+    /// ball's streak had the lowest likeness (0.962 against 0.999 and 1.0), which swapped the
+    /// object ball's and the incoming streaks until the likeness had a tie margin.
+    #[test]
+    fn one_colour_pairs_are_read_by_their_geometry() {
+        let DrawnCue { streaks, o, r, .. } = drawn_cue_scene([0.05; 3]);
         let steel = [0.64f32, 0.58, 0.50];
         let norm = steel.iter().map(|v| v * v).sum::<f32>().sqrt();
         let colours = [steel.map(|v| v / norm); 3];
@@ -3374,50 +3391,18 @@ mod tests {
     /// The cue ball arrives faster than it leaves, so its streak is fainter before `P` than
     /// after ([`CUE_LIGHT_RATIO_MAX`]): a reading whose incoming streak is more than twice as
     /// bright near `P` as the cue ball's way out is refused, whatever its geometry; below that
-    /// it stands. The scene of `one_colour_pairs_are_read_by_their_geometry`, its light varied.
+    /// it stands. The scene of [`drawn_cue_scene`], the cue ball's way out fainter or brighter.
     #[test]
     fn a_cue_ball_arriving_brighter_than_it_leaves_is_not_read_so() {
-        let (r, o) = (47.7, (1400.0, 900.0));
-        let rot = |d: (f64, f64), deg: f64| {
-            let (s, c) = deg.to_radians().sin_cos();
-            (c * d.0 - s * d.1, s * d.0 + c * d.1)
-        };
-        let d_in = (-1.0, 0.0);
-        let n = rot(d_in, -19.0);
-        let p = (o.0 - 2.0 * r * n.0, o.1 - 2.0 * r * n.1);
-        let along = |from: (f64, f64), d: (f64, f64), s0: f64, s1: f64, amp: f64| {
-            let k = ((s1 - s0) / 8.0) as usize;
-            (0..=k)
-                .map(|i| {
-                    let t = s0 + (s1 - s0) * i as f64 / k as f64;
-                    Sample {
-                        x: from.0 + t * d.0,
-                        y: from.1 + t * d.1,
-                        sigma: 0.3,
-                        amp,
-                    }
-                })
-                .collect::<Vec<Sample>>()
-        };
-        let d80 = rot(n, 80.0);
-        let scene = |cue_out_amp: f64| {
-            vec![
-                along(o, rot(n, -5.6), 1.5 * r, 14.0 * r, 0.05),
-                along(p, (-d_in.0, -d_in.1), 2.0 * r, 14.0 * r, 0.05),
-                along(
-                    (p.0 + r * d80.0, p.1 + r * d80.1),
-                    rot(n, 121.0),
-                    r,
-                    4.5 * r,
-                    cue_out_amp,
-                ),
-            ]
-        };
+        let scene = |cue_out_amp: f64| drawn_cue_scene([0.05, 0.05, cue_out_amp]);
         let colours = [[0.6f32, 0.6, 0.529]; 3];
         let throw = (21.0f64 + THROW_READING_SLACK_DEG).to_radians();
-        let read = |amp: f64| read_scene(&scene(amp), &[1.0; 3], &colours, o, r, false, throw);
+        let read = |amp: f64| {
+            let DrawnCue { streaks, o, r, .. } = scene(amp);
+            read_scene(&streaks, &[1.0; 3], &colours, o, r, false, throw)
+        };
         // Within 1.5–5 R of P each streak has samples enough to be asked.
-        let streaks = scene(0.05);
+        let DrawnCue { streaks, r, p, .. } = scene(0.05);
         assert!(light_near(&streaks[1], p, r).0 >= CUE_LIGHT_MIN_SAMPLES);
         assert!(light_near(&streaks[2], p, r).0 >= CUE_LIGHT_MIN_SAMPLES);
         for amp in [0.1, 0.05, 0.05 / 1.9] {
