@@ -15,9 +15,10 @@
 use crate::cli::{CliError, CliResult, Outcome};
 use crate::extract::{
     ball_friction_bounds, decode_plates, folder_of, folder_textures, job_options, list_jobs,
+    process,
 };
 use crate::table::Status;
-use crate::vision::{AnalysisOptions, Cloth, analyse, image_io, stages};
+use crate::vision::{AnalysisOptions, image_io, stages};
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -153,24 +154,21 @@ pub fn run(args: &StagesArgs) -> CliResult {
             }
         };
         let decode_ms = t.elapsed().as_secs_f64() * 1e3;
-        let plate = match j.plate.as_ref().and_then(|p| plates.get(p)) {
-            Some(Ok(p)) => Some(p.as_ref()),
-            Some(Err(e)) => {
-                eprintln!("{}: {e}", j.path.display());
-                failed += 1;
-                continue;
-            }
-            None => None,
-        };
+        let plate = j.plate.as_ref().and_then(|p| plates.get(p));
+        if let Some(Err(e)) = plate {
+            eprintln!("{}: {e}", j.path.display());
+            failed += 1;
+            continue;
+        }
         let opts = job_options(j, &base, &friction);
-        let cloth = Cloth::of(plate, textures.get(&folder_of(j)).map(|t| t.as_ref()));
+        let texture = textures.get(&folder_of(j)).map(|t| t.as_ref());
         let t = Instant::now();
-        let (a, times) = one.install(|| {
-            stages::record(|| analyse(&img, cloth, j.scene.ball_radius_px_cloth(), &opts))
-        });
+        // As `extract` analyses it (its row without the overlay).
+        let (row, times) =
+            one.install(|| stages::record(|| process(j, Some(img), plate, texture, None, &opts)));
         photos.push(PhotoTimes {
             file: j.file.clone(),
-            status: a.status,
+            status: row.status,
             decode_ms,
             analysis_ms: t.elapsed().as_secs_f64() * 1e3,
             stages: times,

@@ -643,6 +643,8 @@ fn read_scene(
             continue;
         };
         let m = if psi_s < 0.0 { -1.0 } else { 1.0 };
+        // Each streak's light near this P, for the cue ball's two ([`CUE_LIGHT_RATIO_MAX`]).
+        let near: Vec<(usize, f64)> = streaks.iter().map(|s| light_near(s, p, r)).collect();
         for b2 in 0..k {
             if b2 == inc {
                 continue;
@@ -711,8 +713,7 @@ fn read_scene(
                         cost += 0.5;
                     }
                     // It arrives faster than it leaves: the streak brighter near P is its way out.
-                    let (ni, li) = light_near(&streaks[inc], p, r);
-                    let (no, lo) = light_near(&streaks[b1], p, r);
+                    let ((ni, li), (no, lo)) = (near[inc], near[b1]);
                     if ni.min(no) >= CUE_LIGHT_MIN_SAMPLES
                         && lo > 0.0
                         && li > CUE_LIGHT_RATIO_MAX * lo
