@@ -1333,6 +1333,23 @@ fn two_resting_balls_read_by_the_only_story_the_streaks_tell() {
     );
 }
 
+/// Realistic seed 3602 shot_008 (billiard, psi 43.9°, a stun shot): read either way round, the
+/// cue ball's two streaks leave the object ball's throw within 3° of each other, and until
+/// session 42 the shot was declined ("cannot tell which ball is which"). The reverse story has
+/// the cue ball arriving 2.4 times as bright near `P` as it leaves, which a ball that loses
+/// speed at the impact cannot do: it is refused, and the right one is read.
+#[test]
+fn a_cue_ball_is_read_arriving_along_its_fainter_streak() {
+    ok_of_24(
+        "cue_light",
+        3602,
+        &["--material", "mixed"],
+        "shot_008.jpg",
+        43.888,
+        "delta2 not resolved",
+    );
+}
+
 #[test]
 fn an_object_streak_must_have_its_waiting_discs_colour() {
     // Fresh realistic seed 707's shot_021 (rubber, psi 10.65°): a white cue ball and a coloured
