@@ -1224,10 +1224,10 @@ const REST_NEAR_P_PSI_MAX_DEG: f64 = 12.0;
 /// 1,656 near head-on shots of 100 synthetic sets (2,412 photos). Let through, 220 were `ok`, 40
 /// of them misread, 39 of those with a curved object path (33 steel follow shots whose cue
 /// ball's path was read as the object ball's, `theta2` its `theta1`, 5–20° off; six rubber ones,
-/// `psi` 1.5–5° off) against 10 right ones (six rubber, four billiard). With the straight-path
-/// rule (session 43) 180 of them are read, two misread (a billiard draw shot, `psi` 2.1° off at
-/// 0.19°; a rubber follow shot's `theta2`, 2.2° off at 0.17°): 986 `ok` rows become 1,166 and
-/// 11 misread ones 13. Asked of the light as well (the object ball near `O` no brighter than
+/// `psi` 1.5–5° off) against 11 right ones (seven rubber, four billiard). With the straight-path
+/// rule (session 43) 170 of them are read and 12 more on the sets' other photos, two of the 182
+/// misread (a billiard draw shot, `psi` 2.1° off at 0.19°; a rubber follow shot's `theta2`,
+/// 2.2° off at 0.17°): 986 `ok` rows become 1,168 and 11 misread ones 13. Asked of the light as well (the object ball near `O` no brighter than
 /// twice the incoming streak near `P`: it leaves at nearly the incoming speed, a followed cue
 /// ball at a third of it), it declined two right readings more and no misread one, and is not
 /// asked.
