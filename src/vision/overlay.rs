@@ -236,7 +236,7 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
         lines.push(format!(
             "{}   ({}{})",
             fmt_angle("delta1", a.delta1_deg, a.delta1_err_deg, &a.reason),
-            a.path_model1.as_deref().unwrap_or("stopped"),
+            cue_model_label(a.path_model1.as_deref(), &a.reason),
             if a.arc.is_some() {
                 "; delta1 from the arc fit at P, orange"
             } else {
@@ -289,4 +289,39 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
         );
     }
     out
+}
+
+/// The overlay's label of the cue ball's path model: the model's name, or, without a path,
+/// whether the ball stopped at the impact or its path was not found (hidden in the other
+/// streaks, or too short to track), as the reason says.
+fn cue_model_label<'a>(model: Option<&'a str>, reason: &str) -> &'a str {
+    match model {
+        Some(m) => m,
+        None if reason.contains("cue ball's path not found") => "path not found",
+        None => "stopped",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cue_model_label;
+
+    #[test]
+    fn a_cue_ball_without_a_path_is_labelled_by_the_reason() {
+        assert_eq!(cue_model_label(Some("line"), ""), "line");
+        assert_eq!(
+            cue_model_label(
+                None,
+                "cue ball's path not found (hidden near the impact): delta1, theta1 undefined"
+            ),
+            "path not found"
+        );
+        assert_eq!(
+            cue_model_label(
+                None,
+                "cue ball stops at the impact: delta1, theta1 undefined"
+            ),
+            "stopped"
+        );
+    }
 }
