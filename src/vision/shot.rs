@@ -1207,30 +1207,30 @@ const STOP_PSI_MAX_DEG: f64 = 3.0;
 /// of the same kind (seeds 905–909) 7 more rows, all within 1.3 sigma.
 const REST_NEAR_P_PSI_MAX_DEG: f64 = 12.0;
 
-/// Impact angle (degrees) below which a two-streak reading whose cue ball neither rests at `P`
-/// nor shows its own path must have a straight object path ([`hidden_cue_path`]). The cue ball
-/// is then hidden in the streaks: it ran on along the object ball's streak (follow) or back
-/// along the incoming one (draw), within `2R` of it over a few radii, and its light shows as a
-/// curve in the path read as the object ball's. Near head-on the object ball itself leaves
-/// nearly straight: by the impact model's closed forms its start and rolling directions differ
-/// by at most 0.15° for billiard balls' friction, 0.6° for steel's and 2° for rubber's over
-/// psi 0–12°, any spin and English ±0.4 (the test
-/// `near_head_on_an_object_ball_leaves_straight_and_a_cue_ball_turns`), while a followed or
-/// drawn cue ball turns by tens of degrees. Further from head-on a high-friction object ball bends visibly (clean seed 101 shot_001 in `docs/accuracy.sh`'s
-/// three materials, rubber at psi 21.6°: `theta2` 4.17° for 4.17°, its path a parabola).
+/// Impact angle (degrees) below which a two-streak reading whose cue ball neither rests at `P` nor
+/// shows its own path must have a straight object path ([`hidden_cue_path`]). The cue ball is then
+/// hidden in the streaks: it ran on along the object ball's streak (follow) or back along the
+/// incoming one (draw), within `2R` of it over a few radii, and its light shows as a curve in the
+/// path read as the object ball's. Near head-on the object ball itself leaves nearly straight: by
+/// the impact model's closed forms its start and rolling directions differ by at most 0.15° for
+/// billiard balls' friction, 0.6° for steel's and 2° for rubber's over psi 0–12°, any spin and
+/// English ±0.4 (the test `near_head_on_an_object_ball_leaves_straight_and_a_cue_ball_turns`),
+/// while a followed or drawn cue ball turns by tens of degrees. Further from head-on a
+/// high-friction object ball bends visibly (clean seed 101 shot_001 in `docs/accuracy.sh`'s three
+/// materials, rubber at psi 21.6°: `theta2` 4.17° for 4.17°, its path a parabola).
 ///
-/// Until session 42 every such reading below 12° was declined (clean synthetic shots at psi <
-/// 10°, follow and draw, had been read 1–10° off at stated errors of hundredths): 425 of the
-/// 1,656 near head-on shots of 100 synthetic sets (2,412 photos). Let through, 220 were `ok`, 40
-/// of them misread, 39 of those with a curved object path (33 steel follow shots whose cue
-/// ball's path was read as the object ball's, `theta2` its `theta1`, 5–20° off; six rubber ones,
-/// `psi` 1.5–5° off) against 11 right ones (seven rubber, four billiard). With the straight-path
-/// rule (session 43) 170 of them are read and 12 more on the sets' other photos, two of the 182
-/// misread (a billiard draw shot, `psi` 2.1° off at 0.19°; a rubber follow shot's `theta2`,
-/// 2.2° off at 0.17°): 986 `ok` rows become 1,168 and 11 misread ones 13. Asked of the light as well (the object ball near `O` no brighter than
-/// twice the incoming streak near `P`: it leaves at nearly the incoming speed, a followed cue
-/// ball at a third of it), it declined two right readings more and no misread one, and is not
-/// asked.
+/// Until session 42 every such reading below 12° was declined (clean synthetic shots at psi < 10°,
+/// follow and draw, had been read 1–10° off at stated errors of hundredths): 425 of the 1,656 near
+/// head-on shots of 100 synthetic sets (2,412 photos). Let through, 220 were `ok`, 40 of them
+/// misread, 39 of those with a curved object path (33 steel follow shots whose cue ball's path was
+/// read as the object ball's, `theta2` its `theta1`, 5–20° off; six rubber ones, `psi` 1.5–5° off)
+/// against 11 right ones (seven rubber, four billiard). With the straight-path rule (session 43)
+/// 170 of them are read and 12 more on the sets' other photos, two of the 182 misread (a billiard
+/// draw shot, `psi` 2.1° off at 0.19°; a rubber follow shot's `theta2`, 2.2° off at 0.17°): 986
+/// `ok` rows become 1,168 and 11 misread ones 13. Asked of the light as well (the object ball near
+/// `O` no brighter than twice the incoming streak near `P`: it leaves at nearly the incoming speed,
+/// a followed cue ball at a third of it), it declined two right readings more and no misread one,
+/// and is not asked.
 const HIDDEN_PATH_PSI_MIN_DEG: f64 = 12.0;
 
 /// Why a near head-on two-streak reading with the cue ball hidden in the streaks cannot stand
@@ -1243,21 +1243,21 @@ fn hidden_cue_path(fit: &JointFit) -> Option<String> {
     })
 }
 
-/// Largest stated 1-sigma of psi (degrees) of a reading with two streaks and no light at the
-/// impact point: without the cue ball's path nothing but the incoming line and the object
-/// ball's path places the impact, and a misread disc moves both. Until session 28 such
-/// readings were all declined; on the 19 comparison sets they are 7 right readings at
-/// psi's sigma 0.03–0.23° and one misread at 0.75° (realistic seed 202 shot_005: the disc fitted
-/// 31 px off a ball waiting in a head-on shot, psi read 14.4° for 3.3°). From session 28 to
-/// 36 the bound was 0.5°. Session 37, 80 sets (the 19, 49 near head-on sets of seeds 901–934
-/// and 3701–3716, 12 fresh realistic ones): the 23 such readings that were right stated
-/// 0.018–0.22°, and 7 of the 8 misread ones 0.29–0.47°, psi read 12.3–24.8° for 2.6–10.8°
-/// (near head-on shots read above [`HIDDEN_PATH_PSI_MIN_DEG`], below which such readings were
-/// then declined: a follow shot's cue ball lingering at `P` taken for the object ball's disc,
-/// or a drawn one's way back pulling the incoming line). On 20 fresh near head-on check sets
-/// made afterwards (seeds 3717–3736, 480 shots) it declines 3 of 8 misread rows (psi
-/// 16.0–19.4° ± 0.26–0.43° for 2.9–8.4°) and no right one; in the demo one right row (steel shot_020, psi 31.5° ± 0.45° for 31.1°). A cue
-/// ball resting near `P` at an oblique impact keeps [`REST_OBLIQUE_PSI_SD_MAX_DEG`].
+/// Largest stated 1-sigma of psi (degrees) of a reading with two streaks and no light at the impact
+/// point: without the cue ball's path nothing but the incoming line and the object ball's path
+/// places the impact, and a misread disc moves both. Until session 28 such readings were all
+/// declined; on the 19 comparison sets they are 7 right readings at psi's sigma 0.03–0.23° and one
+/// misread at 0.75° (realistic seed 202 shot_005: the disc fitted 31 px off a ball waiting in a
+/// head-on shot, psi read 14.4° for 3.3°). From session 28 to 36 the bound was 0.5°. Session 37, 80
+/// sets (the 19, 49 near head-on sets of seeds 901–934 and 3701–3716, 12 fresh realistic ones): the
+/// 23 such readings that were right stated 0.018–0.22°, and 7 of the 8 misread ones 0.29–0.47°, psi
+/// read 12.3–24.8° for 2.6–10.8° (near head-on shots read above [`HIDDEN_PATH_PSI_MIN_DEG`], below
+/// which such readings were then declined: a follow shot's cue ball lingering at `P` taken for the
+/// object ball's disc, or a drawn one's way back pulling the incoming line). On 20 fresh near
+/// head-on check sets made afterwards (seeds 3717–3736, 480 shots) it declines 3 of 8 misread rows
+/// (psi 16.0–19.4° ± 0.26–0.43° for 2.9–8.4°) and no right one; in the demo one right row (steel
+/// shot_020, psi 31.5° ± 0.45° for 31.1°). A cue ball resting near `P` at an oblique impact keeps
+/// [`REST_OBLIQUE_PSI_SD_MAX_DEG`].
 const HIDDEN_PATH_PSI_SD_MAX_DEG: f64 = 0.25;
 
 /// Largest stated 1-sigma of psi (degrees) of a reading with a cue ball resting near `P` at an
