@@ -297,7 +297,7 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
 fn cue_model_label<'a>(model: Option<&'a str>, reason: &str) -> &'a str {
     match model {
         Some(m) => m,
-        None if reason.contains("cue ball's path not found") => "path not found",
+        None if reason.contains(super::shot::CUE_PATH_NOT_FOUND) => "path not found",
         None => "stopped",
     }
 }

@@ -633,6 +633,7 @@ fn read_scene(
     cue_stopped: bool,
     throw_max: f64,
 ) -> Result<Reading, String> {
+    let debug = std::env::var_os("STREAKFIT_DEBUG").is_some();
     let k = streaks.len();
     let lines: Vec<Option<Line>> = streaks.iter().map(|s| fit_line(s)).collect();
     let mut readings = Vec::new();
@@ -663,7 +664,7 @@ fn read_scene(
             // The object ball's rolling line passes close to its start O.
             let miss2 = l2.offset(o).abs();
             if t2.abs() > throw_max || miss2 > 1.5 * r {
-                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                if debug {
                     eprintln!(
                         "inc {inc} b2 {b2}: t2 {:.1}° miss2 {miss2:.1}",
                         t2.to_degrees()
@@ -675,7 +676,7 @@ fn read_scene(
             // colour leaving along the line of centres is not its path ([`OBJECT_COLOUR_MIN`]).
             if likeness[b2] < OBJECT_COLOUR_MIN {
                 refused_colour = Some(refused_colour.map_or(likeness[b2], |c| c.min(likeness[b2])));
-                if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                if debug {
                     eprintln!(
                         "inc {inc} b2 {b2}: object streak's colour {:.3} like the disc's",
                         likeness[b2]
@@ -722,7 +723,7 @@ fn read_scene(
                         && lo > 0.0
                         && li > CUE_LIGHT_RATIO_MAX * lo
                     {
-                        if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+                        if debug {
                             eprintln!(
                                 "inc {inc} b1 {b1} b2 {b2}: arrives {:.2} times as bright as it leaves",
                                 li / lo
@@ -744,7 +745,7 @@ fn read_scene(
         }
     }
     readings.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+    if debug {
         for rd in &readings {
             eprintln!(
                 "reading inc {} b1 {:?} b2 {} cost {:.3} x0 {:.3?}",
@@ -1235,12 +1236,11 @@ const HIDDEN_PATH_PSI_MIN_DEG: f64 = 12.0;
 
 /// Why a near head-on two-streak reading with the cue ball hidden in the streaks cannot stand
 /// (see [`HIDDEN_PATH_PSI_MIN_DEG`]), or `None`: its object ball's path must be straight.
-fn hidden_cue_path(fit: &JointFit) -> Option<String> {
-    (fit.m2 != pathfit::PathModel::Line).then(|| {
+fn hidden_cue_path(fit: &JointFit) -> Option<&'static str> {
+    (fit.m2 != pathfit::PathModel::Line).then_some(
         "the object ball's path curves, as the hidden cue ball's would where it runs along it \
-         (an object ball leaves a near head-on impact on a nearly straight path)"
-            .into()
-    })
+         (an object ball leaves a near head-on impact on a nearly straight path)",
+    )
 }
 
 /// Largest stated 1-sigma of psi (degrees) of a reading with two streaks and no light at the impact
@@ -1322,6 +1322,11 @@ fn slide_end_ratio(fit: &JointFit, ball: usize) -> Option<f64> {
         l1 / l0
     })
 }
+
+/// The note of an `ok` reading without the cue ball's path that neither rests at `P` nor
+/// stopped there (the overlay labels its cue ball by it).
+pub(crate) const CUE_PATH_NOT_FOUND: &str =
+    "cue ball's path not found (hidden near the impact): delta1, theta1 undefined";
 
 /// Why a straight path leaves its start tangent unresolved. Such a path states `delta = theta`,
 /// which the fit cannot use (it would count `theta` twice), and a slide short enough to hide
@@ -3321,7 +3326,7 @@ fn read_body(
             } else if cue_at_rest {
                 "cue ball stops at the impact: delta1, theta1 undefined"
             } else {
-                "cue ball's path not found (hidden near the impact): delta1, theta1 undefined"
+                CUE_PATH_NOT_FOUND
             }
             .into(),
         );
