@@ -1373,6 +1373,37 @@ fn an_object_streak_must_have_its_waiting_discs_colour() {
 }
 
 #[test]
+fn a_drawn_cue_balls_incoming_streak_is_read_beyond_its_way_back() {
+    // Near head-on realistic seed 934's shot_023 (rubber, psi 6.82°, a draw shot): the cue ball
+    // comes back along its incoming streak and rests beside it, and the walk from the disc
+    // follows its bright way back to that end. Until session 44 the shot was declined ("the
+    // cue ball's way back probably lies along the incoming streak": the object ball's streak
+    // held a fraction of its light). The incoming streak goes on beyond the resting ball, and
+    // the shot is read on that part of it: psi and `theta2` right, the way back not measured.
+    let (r, t) = one_of_24_with(
+        "drawn_back",
+        "realistic",
+        934,
+        NEAR_HEAD_ON_MIXED,
+        "shot_023.jpg",
+    );
+    assert!(
+        (t[&r.file]["psi_deg"].parse::<f64>().unwrap() - 6.822).abs() < 0.01,
+        "{:?}",
+        t[&r.file]
+    );
+    assert_ok_within_3_sigma(&r, &t, &["psi", "theta2"]);
+    assert!(r.psi_err_deg.unwrap() < 0.2, "{r:#?}");
+    assert_eq!((r.theta1_deg, r.delta1_deg), (None, None), "{r:#?}");
+    assert!(
+        r.reason
+            .starts_with("cue ball drawn back along its incoming streak"),
+        "{}",
+        r.reason
+    );
+}
+
+#[test]
 fn a_two_streak_reading_with_light_but_no_ball_at_p_is_held_to_the_hidden_path_checks() {
     // Near head-on realistic seed 920's shot_019 (steel, psi 6.93°, a draw shot): the drawn cue
     // ball's short, bright way back is taken for the incoming streak, and its rounded end lights

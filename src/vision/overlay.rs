@@ -292,12 +292,14 @@ pub fn render(img: &RgbImage, a: &Analysis, title: &str) -> Rgb8 {
 }
 
 /// The overlay's label of the cue ball's path model: the model's name, or, without a path,
-/// whether the ball stopped at the impact or its path was not found (hidden in the other
-/// streaks, or too short to track), as the reason says.
+/// whether the ball stopped at the impact, came back along its incoming streak (a draw shot,
+/// its way back not measured), or its path was not found (hidden in the other streaks, or too
+/// short to track), as the reason says.
 fn cue_model_label<'a>(model: Option<&'a str>, reason: &str) -> &'a str {
     match model {
         Some(m) => m,
         None if reason.contains(super::shot::CUE_PATH_NOT_FOUND) => "path not found",
+        None if reason.contains(super::shot::CUE_DRAWN_BACK) => "drawn back, not measured",
         None => "stopped",
     }
 }
@@ -315,6 +317,15 @@ mod tests {
                 "cue ball's path not found (hidden near the impact): delta1, theta1 undefined"
             ),
             "path not found"
+        );
+        assert_eq!(
+            cue_model_label(
+                None,
+                "cue ball drawn back along its incoming streak (the incoming line measured \
+                 beyond its way back, which is not measured): delta1, theta1 undefined; delta2 \
+                 not resolved"
+            ),
+            "drawn back, not measured"
         );
         assert_eq!(
             cue_model_label(

@@ -1136,6 +1136,112 @@ fn median_amp(samples: &[Sample]) -> f64 {
     f64::from(background::median(&mut a))
 }
 
+/// Where the incoming streak goes on beyond the far end of `bright`, a streak read as the
+/// incoming one that is a drawn cue ball's way back: a near head-on draw shot sends the cue ball
+/// back along its incoming streak, slowly (its light several times the streak's), to rest on
+/// or beside it, and the walk from the disc follows that light to its end. The incoming streak,
+/// fainter, goes on past the resting ball: tracked in the same colour from
+/// [`DRAWN_BACK_SEED_R`] beyond the end, its samples from [`DRAWN_BACK_CLEAR_R`] beyond it
+/// on, outward from `p_imp`. `None` unless they span [`DRAWN_BACK_SPAN_R`] and are clearly
+/// fainter than the way back ([`DRAWN_BACK_LIGHT_MAX`]).
+fn incoming_beyond(
+    sig: &Signal,
+    bright: &[Sample],
+    p_imp: (f64, f64),
+    r: f64,
+    ko: KeepOut,
+    colour: [f32; 3],
+    step_r: f64,
+) -> Option<Vec<Sample>> {
+    let dist = |q: &Sample| (q.x - p_imp.0).hypot(q.y - p_imp.1);
+    let end = bright.iter().max_by(|a, b| dist(a).total_cmp(&dist(b)))?;
+    let d_end = dist(end);
+    if d_end < r {
+        return None;
+    }
+    let dir = ((end.x - p_imp.0) / d_end, (end.y - p_imp.1) / d_end);
+    let seed = (
+        end.x + DRAWN_BACK_SEED_R * r * dir.0,
+        end.y + DRAWN_BACK_SEED_R * r * dir.1,
+    );
+    // The track runs from the way back (or the resting ball's disc) into the streak beyond:
+    // its outer run, samples a step or two apart at a steady light, is the streak's.
+    let mut track: Vec<Sample> = streak::track(sig, seed, dir, r, step_r, ko, colour)
+        .into_iter()
+        .filter(|q| (q.x - p_imp.0) * dir.0 + (q.y - p_imp.1) * dir.1 > 0.0)
+        .collect();
+    track.sort_by(|a, b| dist(b).total_cmp(&dist(a)));
+    let gap_max = DRAWN_BACK_GAP_STEPS * (r * step_r).max(2.0);
+    let mut far: Vec<Sample> = Vec::new();
+    for q in track {
+        if dist(&q) < d_end + DRAWN_BACK_CLEAR_R * r {
+            break;
+        }
+        if let Some(last) = far.last() {
+            let level = median_amp(&far);
+            if (q.x - last.x).hypot(q.y - last.y) > gap_max
+                || (far.len() >= 3 && !(0.5 * level..=2.0 * level).contains(&q.amp))
+            {
+                break;
+            }
+        }
+        far.push(q);
+    }
+    far.reverse();
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!(
+            "incoming beyond the way back's end ({:.0},{:.0}), {:.2} R from P: {} samples, \
+             light {:.4} against {:.4}",
+            end.x,
+            end.y,
+            d_end / r,
+            far.len(),
+            median_amp(&far),
+            median_amp(bright)
+        );
+    }
+    let along: Vec<f64> = far.iter().map(dist).collect();
+    let span = along.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - along.iter().copied().fold(f64::INFINITY, f64::min);
+    (far.len() >= DRAWN_BACK_MIN_SAMPLES
+        && span >= DRAWN_BACK_SPAN_R * r
+        && median_amp(&far) <= DRAWN_BACK_LIGHT_MAX * median_amp(bright))
+    .then_some(far)
+}
+
+/// Distance (in R) beyond the far end of a drawn cue ball's way back at which the incoming
+/// streak is sought ([`incoming_beyond`]): the walk ends some 0.8 R past the resting ball's
+/// centre, inside its disc, and the seed must lie in the streak beyond the disc's edge.
+const DRAWN_BACK_SEED_R: f64 = 1.5;
+
+/// Distance (in R) beyond that end from which the incoming streak's samples are kept: clear of
+/// the resting ball's disc (its edge lies within about 0.2 R of the end).
+const DRAWN_BACK_CLEAR_R: f64 = 1.0;
+
+/// Fewest samples, and shortest span (in R), of the incoming streak beyond a drawn cue ball's
+/// way back for the incoming line to be measured on it.
+const DRAWN_BACK_MIN_SAMPLES: usize = 10;
+const DRAWN_BACK_SPAN_R: f64 = 2.0;
+
+/// Largest psi sigma (degrees) of a reading on the incoming streak beyond a drawn cue ball's
+/// way back ([`incoming_beyond`]): any reading's ([`PSI_RESOLVED_DEG`]), not the quarter degree
+/// of a hidden path ([`HIDDEN_PATH_PSI_SD_MAX_DEG`]), whose looser readings were the wrong
+/// story. Here the story is found: on the 100 synthetic sets the 37 such readings stated psi
+/// at 0.07–0.78° and were off by 0.7 of it at the median, the nine above 0.5° by 0.13–0.52°
+/// but one (misread: a steel shot's psi 1.07° off at 0.53°, `theta2` 1.8° at 0.43°); on 84
+/// fresh sets 41 readings at 0.04–0.56°, none misread.
+const DRAWN_BACK_PSI_SD_MAX_DEG: f64 = PSI_RESOLVED_DEG;
+
+/// Largest gap (in sample steps) within the incoming streak's run beyond a drawn cue ball's way
+/// back ([`incoming_beyond`]).
+const DRAWN_BACK_GAP_STEPS: f64 = 2.5;
+
+/// Largest ratio of the incoming streak's light beyond a drawn cue ball's way back to the way
+/// back's own (median amplitudes): the way back is the incoming streak's light and the slow
+/// ball's together, several times the streak alone; a track that stays as bright has not left
+/// the way back.
+const DRAWN_BACK_LIGHT_MAX: f64 = 0.6;
+
 /// How many standard errors apart the object ball's and the incoming streak's time arrows
 /// ([`time_arrow`]) must lie for a head-on shot's two resting balls to be told apart. Measured
 /// (session 21, head-on stun shots at psi 0–1.5°): 5–11 on a clean set with a plate (8 shots);
@@ -1327,6 +1433,11 @@ fn slide_end_ratio(fit: &JointFit, ball: usize) -> Option<f64> {
 /// stopped there (the overlay labels its cue ball by it).
 pub(crate) const CUE_PATH_NOT_FOUND: &str =
     "cue ball's path not found (hidden near the impact): delta1, theta1 undefined";
+
+/// The note of an `ok` reading whose cue ball came back along its incoming streak
+/// ([`incoming_beyond`]): the incoming line is measured beyond the way back, which is not.
+pub(crate) const CUE_DRAWN_BACK: &str = "cue ball drawn back along its incoming streak (the \
+     incoming line measured beyond its way back, which is not measured): delta1, theta1 undefined";
 
 /// Why a straight path leaves its start tangent unresolved. Such a path states `delta = theta`,
 /// which the fit cannot use (it would count `theta` twice), and a slide short enough to hide
@@ -2497,6 +2608,60 @@ fn read_body(
         s.1 = measured[i].clone();
     }
     drop(remeasure_stage);
+    // A near head-on draw shot whose cue ball came back along its incoming streak: the streak
+    // read as the incoming one is its way back (the object ball's streak too faint against it,
+    // [`HIDDEN_PATH_LIGHT_MIN`], or its light growing away from P like a ball coming to rest,
+    // [`INCOMING_ARROW_MAX`]). Where the incoming streak goes on beyond the way back's end
+    // ([`incoming_beyond`]), the shot is read on that part of it, the way back left out.
+    let mut way_back: Option<Vec<Sample>> = None;
+    if cue_stopped && !cue_at_rest {
+        let ratio = median_amp(&measured[reading.b2]) / median_amp(&measured[reading.inc]);
+        let arrow = time_arrow(sig, &measured[reading.inc], p_imp, r);
+        let slow =
+            ratio < HIDDEN_PATH_LIGHT_MIN || arrow.is_some_and(|(a, _)| a > INCOMING_ARROW_MAX);
+        let beyond = if slow {
+            incoming_beyond(
+                sig,
+                &measured[reading.inc],
+                p_imp,
+                r,
+                tracks.ko,
+                colours[reading.inc],
+                opts.sample_step_r,
+            )
+        } else {
+            None
+        };
+        if debug && slow {
+            eprintln!(
+                "drawn back? object light {ratio:.3} of the incoming, its arrow {arrow:?}: \
+                 {:?} samples beyond the way back",
+                beyond.as_ref().map(Vec::len)
+            );
+        }
+        if let Some(far) = beyond {
+            let bright = std::mem::take(&mut measured[reading.inc]);
+            let mut ex = exclusion_for(reading.inc);
+            let mut pts = vec![p_imp];
+            pts.extend(bright.iter().map(|q| (q.x, q.y)));
+            ex.add_band(&pts, 1.1 * r + 1.5, r);
+            let m = streak::remeasure(
+                sig,
+                &far,
+                p_imp,
+                r,
+                opts.sample_step_r,
+                &ex,
+                colours[reading.inc],
+            );
+            measured[reading.inc] = if m.len() >= DRAWN_BACK_MIN_SAMPLES {
+                m
+            } else {
+                far
+            };
+            way_back = Some(bright);
+        }
+    }
     // The incoming ball rolls towards P, faster the farther back it was: its light cannot grow
     // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
     // the incoming streak when the real one is too faint to find).
@@ -2719,6 +2884,11 @@ fn read_body(
                 if let Some(reach) = rest_reach {
                     ex.add_disc(p_imp, (reach + 0.1) * r);
                 }
+                if let Some(back) = &way_back {
+                    let mut pts = vec![p_imp];
+                    pts.extend(back.iter().map(|q| (q.x, q.y)));
+                    ex.add_band(&pts, 1.1 * r + 1.5, r);
+                }
                 ex
             },
             colours[reading.inc],
@@ -2913,6 +3083,11 @@ fn read_body(
             (
                 "a ball rests near the impact point at an oblique impact",
                 REST_OBLIQUE_PSI_SD_MAX_DEG,
+            )
+        } else if way_back.is_some() {
+            (
+                "the cue ball drawn back along its incoming streak",
+                DRAWN_BACK_PSI_SD_MAX_DEG,
             )
         } else {
             (
@@ -3325,6 +3500,8 @@ fn read_body(
                  undefined"
             } else if cue_at_rest {
                 "cue ball stops at the impact: delta1, theta1 undefined"
+            } else if way_back.is_some() {
+                CUE_DRAWN_BACK
             } else {
                 CUE_PATH_NOT_FOUND
             }
