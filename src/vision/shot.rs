@@ -1141,9 +1141,11 @@ fn median_amp(samples: &[Sample]) -> f64 {
 /// back along its incoming streak, slowly (its light several times the streak's), to rest on
 /// or beside it, and the walk from the disc follows that light to its end. The incoming streak,
 /// fainter, goes on past the resting ball: tracked in the same colour from
-/// [`DRAWN_BACK_SEED_R`] beyond the end, its samples from [`DRAWN_BACK_CLEAR_R`] beyond it
-/// on, outward from `p_imp`. `None` unless they span [`DRAWN_BACK_SPAN_R`] and are clearly
-/// fainter than the way back ([`DRAWN_BACK_LIGHT_MAX`]).
+/// [`DRAWN_BACK_SEED_R`] beyond the end, outward from `p_imp`, it is the track's outer run of
+/// samples from [`DRAWN_BACK_CLEAR_R`] beyond the end on (at most [`DRAWN_BACK_GAP_STEPS`]
+/// steps apart, each within half and twice the run's median light). `None` unless they number
+/// [`DRAWN_BACK_MIN_SAMPLES`], span [`DRAWN_BACK_SPAN_R`] and are clearly fainter than the way
+/// back ([`DRAWN_BACK_LIGHT_MAX`]).
 fn incoming_beyond(
     sig: &Signal,
     bright: &[Sample],
@@ -1207,6 +1209,15 @@ fn incoming_beyond(
         && span >= DRAWN_BACK_SPAN_R * r
         && median_amp(&far) <= DRAWN_BACK_LIGHT_MAX * median_amp(bright))
     .then_some(far)
+}
+
+/// Excludes another ball's path from `start` along its centre-line `samples`: a band of half
+/// width `1.1 R` and the antialiased edge (1.5 px), whose margin also covers the sagitta of the
+/// sliding arc between the start and the first clean sample (at most 0.1 R).
+fn exclude_path(ex: &mut streak::Exclusion, start: (f64, f64), samples: &[Sample], r: f64) {
+    let mut pts = vec![start];
+    pts.extend(samples.iter().map(|q| (q.x, q.y)));
+    ex.add_band(&pts, 1.1 * r + 1.5, r);
 }
 
 /// Distance (in R) beyond the far end of a drawn cue ball's way back at which the incoming
@@ -2564,16 +2575,13 @@ fn read_body(
     // Other balls' light around streak `a`: bands around their centre-lines and the discs.
     let exclusion_for = |a: usize| {
         let mut ex = streak::Exclusion::default();
-        // Margins: the antialiased edge (1.5 px) and, for bands, the sagitta of the sliding arc
-        // between the start and the first clean sample (≤ 0.1 R).
+        // Margins: the antialiased edge (1.5 px); the bands' in [`exclude_path`].
         ex.add_disc(o, r + 1.5);
         if let Some(q) = &creep {
             ex.add_disc((q.cx, q.cy), r + 1.5);
         }
         for &b in roles.iter().filter(|&&b| b != a) {
-            let mut pts = vec![start_of(b)];
-            pts.extend(kept[b].iter().map(|q| (q.x, q.y)));
-            ex.add_band(&pts, 1.1 * r + 1.5, r);
+            exclude_path(&mut ex, start_of(b), &kept[b], r);
         }
         ex
     };
@@ -2642,9 +2650,7 @@ fn read_body(
         if let Some(far) = beyond {
             let bright = std::mem::take(&mut measured[reading.inc]);
             let mut ex = exclusion_for(reading.inc);
-            let mut pts = vec![p_imp];
-            pts.extend(bright.iter().map(|q| (q.x, q.y)));
-            ex.add_band(&pts, 1.1 * r + 1.5, r);
+            exclude_path(&mut ex, p_imp, &bright, r);
             let m = streak::remeasure(
                 sig,
                 &far,
@@ -2885,9 +2891,7 @@ fn read_body(
                     ex.add_disc(p_imp, (reach + 0.1) * r);
                 }
                 if let Some(back) = &way_back {
-                    let mut pts = vec![p_imp];
-                    pts.extend(back.iter().map(|q| (q.x, q.y)));
-                    ex.add_band(&pts, 1.1 * r + 1.5, r);
+                    exclude_path(&mut ex, p_imp, back, r);
                 }
                 ex
             },
