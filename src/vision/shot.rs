@@ -1189,26 +1189,24 @@ fn incoming_beyond(
         }
         far.push(q);
     }
-    far.reverse();
+    // Outermost first, as taken: the span is from the last to the first.
+    let span = far.first().map_or(0.0, dist) - far.last().map_or(0.0, dist);
+    let (light, light_back) = (median_amp(&far), median_amp(bright));
     if std::env::var_os("STREAKFIT_DEBUG").is_some() {
         eprintln!(
             "incoming beyond the way back's end ({:.0},{:.0}), {:.2} R from P: {} samples, \
-             light {:.4} against {:.4}",
+             light {light:.4} against {light_back:.4}",
             end.x,
             end.y,
             d_end / r,
             far.len(),
-            median_amp(&far),
-            median_amp(bright)
         );
     }
-    let along: Vec<f64> = far.iter().map(dist).collect();
-    let span = along.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-        - along.iter().copied().fold(f64::INFINITY, f64::min);
+    far.reverse();
     (far.len() >= DRAWN_BACK_MIN_SAMPLES
         && span >= DRAWN_BACK_SPAN_R * r
-        && median_amp(&far) <= DRAWN_BACK_LIGHT_MAX * median_amp(bright))
-    .then_some(far)
+        && light <= DRAWN_BACK_LIGHT_MAX * light_back)
+        .then_some(far)
 }
 
 /// Excludes another ball's path from `start` along its centre-line `samples`: a band of half
@@ -2621,12 +2619,13 @@ fn read_body(
     // [`HIDDEN_PATH_LIGHT_MIN`], or its light growing away from P like a ball coming to rest,
     // [`INCOMING_ARROW_MAX`]). Where the incoming streak goes on beyond the way back's end
     // ([`incoming_beyond`]), the shot is read on that part of it, the way back left out.
+    // The incoming streak's time arrow ([`time_arrow`]), asked here and below.
+    let mut inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
     let mut way_back: Option<Vec<Sample>> = None;
     if cue_stopped && !cue_at_rest {
         let ratio = median_amp(&measured[reading.b2]) / median_amp(&measured[reading.inc]);
-        let arrow = time_arrow(sig, &measured[reading.inc], p_imp, r);
         let slow =
-            ratio < HIDDEN_PATH_LIGHT_MIN || arrow.is_some_and(|(a, _)| a > INCOMING_ARROW_MAX);
+            ratio < HIDDEN_PATH_LIGHT_MIN || inc.is_some_and(|(a, _)| a > INCOMING_ARROW_MAX);
         let beyond = if slow {
             incoming_beyond(
                 sig,
@@ -2642,7 +2641,7 @@ fn read_body(
         };
         if debug && slow {
             eprintln!(
-                "drawn back? object light {ratio:.3} of the incoming, its arrow {arrow:?}: \
+                "drawn back? object light {ratio:.3} of the incoming, its arrow {inc:?}: \
                  {:?} samples beyond the way back",
                 beyond.as_ref().map(Vec::len)
             );
@@ -2666,12 +2665,12 @@ fn read_body(
                 far
             };
             way_back = Some(bright);
+            inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
         }
     }
     // The incoming ball rolls towards P, faster the farther back it was: its light cannot grow
     // away from P the way a ball coming to rest does (a drawn cue ball's short way back, read as
     // the incoming streak when the real one is too faint to find).
-    let inc = time_arrow(sig, &measured[reading.inc], p_imp, r);
     if let Some((arrow, _)) = inc
         && arrow > INCOMING_ARROW_MAX
     {
