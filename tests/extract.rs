@@ -972,6 +972,34 @@ fn a_crept_object_ball_is_read_from_its_two_discs() {
 }
 
 #[test]
+fn a_crept_balls_sweep_tracked_as_a_streak_gives_way_to_its_two_discs() {
+    // Grazing seed 77's shot_015 (clean, no plate, psi 80.58°): the object ball crept 1.4 R and
+    // stopped. The walk from the waiting disc tracked its sweep and rest disc as a short streak,
+    // and the three-streak reading with it cost less than the reading from the two discs; its
+    // path fit then failed ("too few consistent centre-line points") and the photo was declined
+    // until session 45. A streak wholly within the band around the discs' chord is now the
+    // sweep, and the discs tell the ball's direction.
+    let (r, t) = one_of_24_with(
+        "creep_sweep",
+        "clean",
+        77,
+        &["--psi", "72:86"],
+        "shot_015.png",
+    );
+    assert!(
+        (t[&r.file]["psi_deg"].parse::<f64>().unwrap() - 80.583).abs() < 0.01,
+        "{:?}",
+        t[&r.file]
+    );
+    assert_ok_within_3_sigma(&r, &t, &["psi", "theta1", "theta2"]);
+    assert!(
+        r.reason.starts_with("the object ball crept"),
+        "{}",
+        r.reason
+    );
+}
+
+#[test]
 fn a_turn_hidden_at_a_rubber_impact_is_not_read() {
     // The demo's rubber shot_019 (psi 16°): the cue ball turns 25° within 0.4 R of P, inside its
     // own light there. The unfiltered arc fit ends on a long shallow arc that follows the cloth's
