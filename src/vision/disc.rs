@@ -926,6 +926,77 @@ fn shading_bias_on(
     (b.0.abs().max(b.1.abs()).max(b.2.abs()) <= SHADING_BIAS_MAX).then_some(b)
 }
 
+/// Profile step (px) of [`ray_edge`].
+const RAY_STEP: f64 = 0.5;
+
+/// Samples of [`ray_edge`]'s profile for a disc of radius `r`: `0.55 r` to `1.45 r` from the
+/// ray's origin.
+fn ray_samples(r: f64) -> usize {
+    ((1.45 * r - 0.55 * r) / RAY_STEP) as usize + 1
+}
+
+/// The edge of a disc of radius `r` on the ray from `c` along the unit `(ca, sa)`: its
+/// distance from `c` and the drop of the profile across it (the mean level of its inner fifth
+/// minus that of its outer sixth). The steepest descent within `0.75–1.25 r`, sub-pixel by a
+/// parabola through the derivative of the `[1 2 1]`-smoothed profile, then the half-level
+/// crossing there. `prof` is scratch of [`ray_samples`]`(r)` values; `None` where the ray
+/// leaves the photo or the edge sits at the window's end.
+fn ray_edge(
+    sample: &impl Fn(f64, f64) -> Option<f32>,
+    (cx, cy): (f64, f64),
+    (ca, sa): (f64, f64),
+    r: f64,
+    prof: &mut [f32],
+) -> Option<(f64, f32)> {
+    let step = RAY_STEP;
+    let (r_in, r_out) = (0.55 * r, 1.45 * r);
+    let n_s = ((r_out - r_in) / step) as usize + 1;
+    debug_assert_eq!(prof.len(), n_s);
+    for (i, p) in prof.iter_mut().enumerate() {
+        let rr = r_in + step * i as f64;
+        *p = sample(cx + rr * ca, cy + rr * sa)?;
+    }
+    // Derivative of the [1 2 1]-smoothed profile, central difference over 1 px.
+    let sm: Vec<f32> = (0..n_s)
+        .map(|i| {
+            let a = prof[i.saturating_sub(1)];
+            let b = prof[(i + 1).min(n_s - 1)];
+            0.25 * a + 0.5 * prof[i] + 0.25 * b
+        })
+        .collect();
+    let lo = ((0.75 * r - r_in) / step) as usize;
+    let hi = (((1.25 * r - r_in) / step) as usize).min(n_s - 3);
+    let mut best = (0usize, f32::INFINITY);
+    for i in lo.max(2)..hi {
+        let g = sm[i + 1] - sm[i - 1];
+        if g < best.1 {
+            best = (i, g);
+        }
+    }
+    let i = best.0;
+    if i < 3 || i + 3 >= n_s {
+        return None;
+    }
+    let g = |j: usize| (sm[j + 1] - sm[j - 1]) as f64;
+    let (gm, g0, gp) = (g(i - 1), g(i), g(i + 1));
+    let den = gm - 2.0 * g0 + gp;
+    let off = if den.abs() > 1e-12 {
+        (0.5 * (gm - gp) / den).clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    let re0 = r_in + step * (i as f64 + off);
+    // The steepest descent sits inside the silhouette when the ball's limb is darker than its
+    // centre (shading): take the edge where the profile crosses half-way between the levels
+    // just inside and just outside, each extrapolated to the edge by a line through 1.5–3.5 px
+    // on its side (as close as the 1-px antialiased edge allows: the limb of a shaded ball falls
+    // off like a square root, which a wider window misjudges).
+    let re = half_level_crossing(prof, r_in, step, re0).unwrap_or(re0);
+    let inside: f32 = prof[..n_s / 5].iter().sum::<f32>() / (n_s / 5) as f32;
+    let outside: f32 = prof[n_s - n_s / 6..].iter().sum::<f32>() / (n_s / 6) as f32;
+    Some((re, inside - outside))
+}
+
 /// One pass of [`refine_excluding`] around the circle `(cx, cy, r)`: the edge on each ray
 /// (skipping those facing `other`), kept where the ray's drop across it is at least half the
 /// median drop; with that median.
@@ -935,12 +1006,9 @@ fn edge_pass(
     other: Option<(f64, f64)>,
 ) -> Result<(Vec<(f64, f64)>, f32), String> {
     let n_rays = ((2.0 * std::f64::consts::PI * r / 1.5) as usize).clamp(64, 720);
-    let step = 0.5;
-    let (r_in, r_out) = (0.55 * r, 1.45 * r);
-    let n_s = ((r_out - r_in) / step) as usize + 1;
     let mut edges = Vec::with_capacity(n_rays);
     let mut drops = Vec::with_capacity(n_rays);
-    let mut prof = vec![0f32; n_s];
+    let mut prof = vec![0f32; ray_samples(r)];
     for k in 0..n_rays {
         let a = 2.0 * std::f64::consts::PI * k as f64 / n_rays as f64;
         let (ca, sa) = (a.cos(), a.sin());
@@ -949,60 +1017,10 @@ fn edge_pass(
         {
             continue;
         }
-        let mut ok = true;
-        for (i, p) in prof.iter_mut().enumerate() {
-            let rr = r_in + step * i as f64;
-            match sample(cx + rr * ca, cy + rr * sa) {
-                Some(v) => *p = v,
-                None => {
-                    ok = false;
-                    break;
-                }
-            }
+        if let Some((re, drop)) = ray_edge(sample, (cx, cy), (ca, sa), r, &mut prof) {
+            edges.push((cx + re * ca, cy + re * sa));
+            drops.push(drop);
         }
-        if !ok {
-            continue;
-        }
-        // Derivative of the [1 2 1]-smoothed profile, central difference over 1 px.
-        let sm: Vec<f32> = (0..n_s)
-            .map(|i| {
-                let a = prof[i.saturating_sub(1)];
-                let b = prof[(i + 1).min(n_s - 1)];
-                0.25 * a + 0.5 * prof[i] + 0.25 * b
-            })
-            .collect();
-        let lo = ((0.75 * r - r_in) / step) as usize;
-        let hi = (((1.25 * r - r_in) / step) as usize).min(n_s - 3);
-        let mut best = (0usize, f32::INFINITY);
-        for i in lo.max(2)..hi {
-            let g = sm[i + 1] - sm[i - 1];
-            if g < best.1 {
-                best = (i, g);
-            }
-        }
-        let i = best.0;
-        if i < 3 || i + 3 >= n_s {
-            continue;
-        }
-        let g = |j: usize| (sm[j + 1] - sm[j - 1]) as f64;
-        let (gm, g0, gp) = (g(i - 1), g(i), g(i + 1));
-        let den = gm - 2.0 * g0 + gp;
-        let off = if den.abs() > 1e-12 {
-            (0.5 * (gm - gp) / den).clamp(-1.0, 1.0)
-        } else {
-            0.0
-        };
-        let re0 = r_in + step * (i as f64 + off);
-        // The steepest descent sits inside the silhouette when the ball's limb is darker
-        // than its centre (shading): take the edge where the profile crosses half-way between
-        // the levels just inside and just outside, each extrapolated to the edge by a line
-        // through 1.5–3.5 px on its side (as close as the 1-px antialiased edge allows: the
-        // limb of a shaded ball falls off like a square root, which a wider window misjudges).
-        let re = half_level_crossing(&prof, r_in, step, re0).unwrap_or(re0);
-        let inside: f32 = prof[..n_s / 5].iter().sum::<f32>() / (n_s / 5) as f32;
-        let outside: f32 = prof[n_s - n_s / 6..].iter().sum::<f32>() / (n_s / 6) as f32;
-        edges.push((cx + re * ca, cy + re * sa));
-        drops.push(inside - outside);
     }
     if edges.len() < 16 {
         return Err("ball disc too close to the image border to measure".into());
