@@ -1000,6 +1000,33 @@ fn a_crept_balls_sweep_tracked_as_a_streak_gives_way_to_its_two_discs() {
 }
 
 #[test]
+fn a_crept_ball_still_moving_at_the_exposures_end_is_read_from_its_bands_sides() {
+    // Realistic seed 3610's shot_005 (billiard, psi 78.14°, a green object ball on blue
+    // cloth): the object ball crept 2 R and was still moving when the exposure ended, so its
+    // band ends in a soft cap with no rest disc, and the walk from the disc found no streak of
+    // it clear of the cue ball's. The cap read as a disc 12 % small, and the photo was declined
+    // ("no physical reading") until session 45. The band's sides now give its centre-line.
+    let (r, t) = one_of_24_with(
+        "moving_creep",
+        "realistic",
+        3610,
+        &["--material", "mixed"],
+        "shot_005.jpg",
+    );
+    assert!(
+        (t[&r.file]["psi_deg"].parse::<f64>().unwrap() - 78.142).abs() < 0.01,
+        "{:?}",
+        t[&r.file]
+    );
+    assert_ok_within_3_sigma(&r, &t, &["psi", "theta1", "theta2"]);
+    assert!(
+        r.reason.starts_with("the object ball crept") && r.reason.contains("still moving"),
+        "{}",
+        r.reason
+    );
+}
+
+#[test]
 fn a_turn_hidden_at_a_rubber_impact_is_not_read() {
     // The demo's rubber shot_019 (psi 16°): the cue ball turns 25° within 0.4 R of P, inside its
     // own light there. The unfiltered arc fit ends on a long shallow arc that follows the cloth's

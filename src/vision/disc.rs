@@ -1049,6 +1049,10 @@ pub struct Companion {
     pub first: Disc,
     /// The other disc of the same ball.
     pub second: Disc,
+    /// Whether the second is where the ball was when the exposure ended, still moving (its far
+    /// end a soft cap, not a rest disc's rim): its centre then comes from the sides of the band
+    /// the ball swept ([`sweep_line`]), and its radius is the first's.
+    pub moving: bool,
 }
 
 /// Least protrusion of the light past the disc's rim (in radii, and at least 4 px) for a ray
@@ -1075,7 +1079,10 @@ const COMPANION_LIT_LEVEL: f64 = 0.2;
 /// continues) must form one sector at least 30° wide, whose mean direction and greatest reach
 /// place the second disc's centre. Both discs are then refined from their outer halves
 /// ([`refine_excluding`]), and the second must have the first's radius within
-/// `COMPANION_RADIUS_TOL`.
+/// `COMPANION_RADIUS_TOL`. Where it does not, the ball may have been still moving when the
+/// exposure ended: the band's centre-line from its sides ([`sweep_line`]), whose half-width
+/// must then be the waiting disc's radius within the same tolerance, places its last position
+/// (a [`Companion::moving`] pair).
 pub fn companion(sig: &Signal, d: &Disc) -> Option<Companion> {
     let (o, r) = ((d.cx, d.cy), d.r);
     const N: usize = 180;
@@ -1198,8 +1205,120 @@ pub fn companion(sig: &Signal, d: &Disc) -> Option<Companion> {
             sep
         );
     }
-    (same_size && sep >= min_ext && sep < COMPANION_MAX_SEPARATION_R * r)
-        .then_some(Companion { first, second })
+    if !(sep >= min_ext && sep < COMPANION_MAX_SEPARATION_R * r) {
+        return None;
+    }
+    if same_size {
+        return Some(Companion {
+            first,
+            second,
+            moving: false,
+        });
+    }
+    // A ball still moving when the exposure ended leaves a soft cap, whose half-level edge lies
+    // inside the ball's last place: the cap reads small (0.78–0.87 of the waiting disc on the
+    // realistic synthetic sets). The band's sides are sharp whatever the ball's speed, at one
+    // radius either side of its path.
+    // The waiting disc as first fitted, on every edge: its half away from the band reads its
+    // radius short (a half-circle's radius trades with its centre), and at grazing incidence
+    // psi moves by `tan psi` times the radius's relative error.
+    let first = d.clone();
+    let (q, sd, half_width) = sweep_line(sig, &first, (second.cx, second.cy), sep)?;
+    if std::env::var_os("STREAKFIT_DEBUG").is_some() {
+        eprintln!(
+            "companion: the sweep's sides {half_width:.2} px from its centre-line, which reaches \
+             ({:.2},{:.2}) ± {sd:.3}",
+            q.0, q.1
+        );
+    }
+    ((half_width - first.r).abs() < COMPANION_RADIUS_TOL * first.r).then(|| Companion {
+        second: Disc {
+            cx: q.0,
+            cy: q.1,
+            r: first.r,
+            sigma_c: sd,
+            sigma_r: first.sigma_r,
+            contrast: second.contrast,
+            edge_points: Vec::new(),
+            rim: None,
+        },
+        first,
+        moving: true,
+    })
+}
+
+/// Spacing (px) of [`sweep_line`]'s profiles across the band, at least: wider than the 7 px
+/// the edge of one profile reads, so that neighbouring profiles' edges are independent.
+const SWEEP_STEP_MIN_PX: f64 = 8.0;
+/// Fewest profile pairs [`sweep_line`] fits its line to.
+const SWEEP_MIN_PROFILES: usize = 6;
+
+/// The centre-line of the band a ball swept from its disc `d` towards `toward`, `len` px long:
+/// pairs of rays at right angles to the axis, from points every `max(0.1 R, 8 px)` along it
+/// from `0.3 R` to `len`, each find the band's edge on its side ([`ray_edge`], searched within
+/// `0.75–1.25 R`); the midpoints' offsets from the axis are fitted with a line in the distance
+/// along it (least squares, then again without those beyond 3.5 robust sigmas). Returns the
+/// line's point at `len` along the axis, its standard error across the axis (from the
+/// residuals, at least 0.02 px) and the median half-width of the pairs; `None` with fewer than
+/// [`SWEEP_MIN_PROFILES`] pairs.
+fn sweep_line(
+    sig: &Signal,
+    d: &Disc,
+    toward: (f64, f64),
+    len: f64,
+) -> Option<((f64, f64), f64, f64)> {
+    let sample = |x: f64, y: f64| sig.sample(x, y);
+    let (o, r) = ((d.cx, d.cy), d.r);
+    let l = (toward.0 - o.0).hypot(toward.1 - o.1).max(1e-9);
+    let a = ((toward.0 - o.0) / l, (toward.1 - o.1) / l);
+    let n = (-a.1, a.0);
+    let step = (0.1 * r).max(SWEEP_STEP_MIN_PX);
+    let mut prof = vec![0f32; ray_samples(r)];
+    // (distance along the axis, midpoint's offset across it, half-width, the smaller drop)
+    let mut pairs: Vec<(f64, f64, f64, f32)> = Vec::new();
+    let mut s = 0.3 * r;
+    while s <= len {
+        let c = (o.0 + s * a.0, o.1 + s * a.1);
+        let plus = ray_edge(&sample, c, n, r, &mut prof);
+        let minus = ray_edge(&sample, c, (-n.0, -n.1), r, &mut prof);
+        if let (Some((ep, dp)), Some((em, dm))) = (plus, minus) {
+            pairs.push((s, 0.5 * (ep - em), 0.5 * (ep + em), dp.min(dm)));
+        }
+        s += step;
+    }
+    // Pairs whose edges are far fainter than the typical one meet another ball's light.
+    let drops: Vec<f32> = pairs.iter().map(|p| p.3).collect();
+    let md = median_of(&drops);
+    if md <= 0.0 {
+        return None;
+    }
+    pairs.retain(|p| p.3 > 0.5 * md);
+    let line = |pts: &[(f64, f64, f64, f32)]| -> Option<(f64, f64, f64, f64, f64)> {
+        let k = pts.len() as f64;
+        if pts.len() < SWEEP_MIN_PROFILES {
+            return None;
+        }
+        let ms = pts.iter().map(|p| p.0).sum::<f64>() / k;
+        let mv = pts.iter().map(|p| p.1).sum::<f64>() / k;
+        let sxx: f64 = pts.iter().map(|p| (p.0 - ms).powi(2)).sum();
+        let sxv: f64 = pts.iter().map(|p| (p.0 - ms) * (p.1 - mv)).sum();
+        let b = if sxx > 0.0 { sxv / sxx } else { 0.0 };
+        let res: Vec<f32> = pts
+            .iter()
+            .map(|p| (p.1 - mv - b * (p.0 - ms)).abs() as f32)
+            .collect();
+        let sr = (1.4826 * median_of(&res) as f64).max(0.02);
+        Some((ms, mv, b, sxx, sr))
+    };
+    let (ms, mv, b, _, sr) = line(&pairs)?;
+    pairs.retain(|p| (p.1 - mv - b * (p.0 - ms)).abs() < 3.5 * sr);
+    let (ms, mv, b, sxx, sr) = line(&pairs)?;
+    let k = pairs.len() as f64;
+    let v = mv + b * (len - ms);
+    let sd = (sr * (1.0 / k + (len - ms).powi(2) / sxx).sqrt()).max(0.02);
+    let widths: Vec<f32> = pairs.iter().map(|p| p.2 as f32).collect();
+    let q = (o.0 + len * a.0 + v * n.0, o.1 + len * a.1 + v * n.1);
+    Some((q, sd, median_of(&widths) as f64))
 }
 
 #[cfg(test)]
@@ -1434,6 +1553,66 @@ mod tests {
             let c = companion(&sig, &start(&sig, w));
             assert!(c.is_none(), "{c:?}");
         }
+    }
+
+    /// A ball that crept 80 px (2 R) from its waiting disc and was still moving when the
+    /// exposure ended, under a lamp off to one side: no rest disc, the band's far end a soft cap
+    /// that reads small. The band's sides give its centre-line ([`sweep_line`]): the pair is
+    /// found as a moving one, the waiting disc as first fitted, and the line from it to the
+    /// band's end within 0.2° of the ball's path.
+    #[test]
+    fn companion_reads_a_still_moving_balls_band_from_its_sides() {
+        let r = 40.0;
+        let (w, q) = ((200.3, 210.2), (200.3 + 80.0 * 0.94, 210.2 + 80.0 * 0.342));
+        let rgb = [0.86, 0.85, 0.8];
+        let frame = Frame {
+            segments: vec![render::Segment {
+                a: [w.0, w.1],
+                b: [q.0, q.1],
+                frac: 0.3,
+                r,
+                rgb,
+            }],
+            discs: vec![render::Disc {
+                c: [w.0, w.1],
+                r,
+                frac: 0.45,
+                rgb,
+                specular: 0.3,
+            }],
+        };
+        let mut bd = Backdrop::plain(520, 420, 1.0);
+        bd.light = [-0.3, -0.4, 1.0];
+        let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, Some(5));
+        let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
+        let coarse = CoarseDisc {
+            cx: w.0 + 2.0,
+            cy: w.1 - 1.5,
+            r: r - 2.0,
+            level: 0.0,
+            elongation: 1.0,
+        };
+        let c = companion(&sig, &refine(&sig, &coarse).expect("disc")).expect("the band is read");
+        assert!(c.moving, "{c:?}");
+        let (ex, ey) = (c.first.cx + 0.5 - w.0, c.first.cy + 0.5 - w.1);
+        assert!(ex.hypot(ey) < 0.25, "waiting disc {:?}", c.first);
+        assert!((c.second.r - c.first.r).abs() < 1e-12, "{c:?}");
+        let dir = (c.second.cy - c.first.cy).atan2(c.second.cx - c.first.cx);
+        let true_dir = (q.1 - w.1).atan2(q.0 - w.0);
+        assert!(
+            (dir - true_dir).abs().to_degrees() < 0.2,
+            "{} against {}: {c:?}",
+            dir.to_degrees(),
+            true_dir.to_degrees()
+        );
+        // Its stated error across the axis covers what it is off.
+        let axis = (true_dir.cos(), true_dir.sin());
+        let (fx, fy) = (c.second.cx + 0.5 - q.0, c.second.cy + 0.5 - q.1);
+        let across = (fy * axis.0 - fx * axis.1).abs();
+        assert!(
+            across < 3.0 * c.second.sigma_c.max(0.1),
+            "{across} px: {c:?}"
+        );
     }
 
     /// A red ball resting by a red streak and a white one, on the hard tier's light green cloth
