@@ -948,9 +948,7 @@ fn ray_edge(
     r: f64,
     prof: &mut [f32],
 ) -> Option<(f64, f32)> {
-    let step = RAY_STEP;
-    let (r_in, r_out) = (0.55 * r, 1.45 * r);
-    let n_s = ((r_out - r_in) / step) as usize + 1;
+    let (step, r_in, n_s) = (RAY_STEP, 0.55 * r, ray_samples(r));
     debug_assert_eq!(prof.len(), n_s);
     for (i, p) in prof.iter_mut().enumerate() {
         let rr = r_in + step * i as f64;
@@ -1045,7 +1043,8 @@ fn edge_pass(
 /// form one patch of light with no streak of its own.
 #[derive(Debug, Clone)]
 pub struct Companion {
-    /// The disc found first, refined from its rays facing away from the other.
+    /// The disc found first, refined from its rays facing away from the other (as fitted on
+    /// every edge when the other is a moving ball's last place: see [`Companion::moving`]).
     pub first: Disc,
     /// The other disc of the same ball.
     pub second: Disc,
