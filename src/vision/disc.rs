@@ -1470,6 +1470,18 @@ mod tests {
     /// streak leaving it, have none. (Half circles that keep only rays beyond 105° from the
     /// other disc, tried: 0.08 px on the lit disc but 0.6 px on the dark one, and on the
     /// synthetic sets 4 rows and 6 grazing readings lost.)
+    /// The disc refined from a coarse start a couple of pixels off the ball at `c` of radius `r`.
+    fn disc_near(sig: &Signal, c: (f64, f64), r: f64) -> Disc {
+        let coarse = CoarseDisc {
+            cx: c.0 + 2.0,
+            cy: c.1 - 1.5,
+            r: r - 2.0,
+            level: 0.0,
+            elongation: 1.0,
+        };
+        refine(sig, &coarse).expect("disc")
+    }
+
     #[test]
     fn companion_finds_a_crept_balls_rest_disc() {
         let r = 40.0;
@@ -1493,16 +1505,7 @@ mod tests {
             bd.light = [-0.3, -0.4, 1.0];
             crate::vision::rendered_with_plate(frame, &bd, Some(5))
         };
-        let start = |sig: &Signal, c: (f64, f64)| {
-            let coarse = CoarseDisc {
-                cx: c.0 + 2.0,
-                cy: c.1 - 1.5,
-                r: r - 2.0,
-                level: 0.0,
-                elongation: 1.0,
-            };
-            refine(sig, &coarse).expect("disc")
-        };
+        let start = |sig: &Signal, c: (f64, f64)| disc_near(sig, c, r);
         let crept = Frame {
             segments: vec![sweep(w, q, 0.15)],
             discs: vec![ball(w, 0.45), ball(q, 0.3)],
@@ -1584,14 +1587,7 @@ mod tests {
         bd.light = [-0.3, -0.4, 1.0];
         let (img, plate) = crate::vision::rendered_with_plate(&frame, &bd, Some(5));
         let sig = background::build(&img, background::Cloth::Plate(&plate), 600).expect("signal");
-        let coarse = CoarseDisc {
-            cx: w.0 + 2.0,
-            cy: w.1 - 1.5,
-            r: r - 2.0,
-            level: 0.0,
-            elongation: 1.0,
-        };
-        let c = companion(&sig, &refine(&sig, &coarse).expect("disc")).expect("the band is read");
+        let c = companion(&sig, &disc_near(&sig, w, r)).expect("the band is read");
         assert!(c.moving, "{c:?}");
         let (ex, ey) = (c.first.cx + 0.5 - w.0, c.first.cy + 0.5 - w.1);
         assert!(ex.hypot(ey) < 0.25, "waiting disc {:?}", c.first);
